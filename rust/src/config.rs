@@ -1,0 +1,625 @@
+//! Run configuration: the serde schema shared with the Python layer (which serialises its
+//! dataclasses to this JSON shape) and the up-front validation of every field.
+//!
+//! Units are SI throughout (m, s, kg, N, Pa). Displacements are positive downward.
+
+use crate::error::{Result, VtbError};
+use serde::{Deserialize, Serialize};
+
+/// Name used in coupling definitions for the fixed ground below the lowest layer.
+pub const GROUND: &str = "ground";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    pub structure: StructureConfig,
+    #[serde(default)]
+    pub discretisation: DiscretisationConfig,
+    /// Cars of the train, all running at `speed`. Empty for the moving-load mode.
+    #[serde(default)]
+    pub vehicles: Vec<VehicleConfig>,
+    /// Constant moving forces (moving-load mode, bridge checks); may be combined with vehicles.
+    #[serde(default)]
+    pub forces: Vec<MovingForceConfig>,
+    /// Speed of all vehicles and forces (m/s), in the +x direction.
+    pub speed: f64,
+    #[serde(default)]
+    pub solver: SolverConfig,
+    #[serde(default)]
+    pub output: OutputConfig,
+    /// Tuned inerter dampers between two layers (optional).
+    #[serde(default)]
+    pub tids: Option<TidConfig>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureConfig {
+    /// Common length L of all layers (m); x runs from 0 to L.
+    pub length: f64,
+    /// Beam layers from top (the layer the wheels run on) to bottom.
+    pub layers: Vec<LayerConfig>,
+    /// Spring–dashpot connections between layers, or between a layer and the ground.
+    #[serde(default)]
+    pub couplings: Vec<CouplingConfig>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerConfig {
+    pub name: String,
+    /// Density ρ (kg/m³).
+    pub density: f64,
+    /// Cross-section area A (m²).
+    pub area: f64,
+    /// Young's modulus E (Pa).
+    pub youngs_modulus: f64,
+    /// Second moment of area I (m⁴).
+    pub inertia: f64,
+    /// Number of sine modes of the modal/hybrid basis (the 4 Hermite DOFs come on top).
+    pub modes: usize,
+    /// Extra sine modes treated as local (FE–SEA) modes by the hybrid method.
+    #[serde(default)]
+    pub local_modes: usize,
+    pub damping: RayleighConfig,
+}
+
+/// Rayleigh damping C = αM + βK of one layer.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RayleighConfig {
+    /// Damping ratio `ratio` at the two frequencies `f1` < `f2` (Hz).
+    Ratio { ratio: f64, f1: f64, f2: f64 },
+    /// Explicit coefficients α (1/s) and β (s).
+    Coefficients { alpha: f64, beta: f64 },
+}
+
+impl RayleighConfig {
+    /// (α, β) of the layer.
+    pub fn coefficients(&self) -> (f64, f64) {
+        match *self {
+            RayleighConfig::Coefficients { alpha, beta } => (alpha, beta),
+            RayleighConfig::Ratio { ratio, f1, f2 } => {
+                let (w1, w2) = (2.0 * std::f64::consts::PI * f1, 2.0 * std::f64::consts::PI * f2);
+                (2.0 * ratio * w1 * w2 / (w1 + w2), 2.0 * ratio / (w1 + w2))
+            }
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CouplingKind {
+    /// Point springs at `positions` (stiffness N/m, damping N·s/m per point).
+    Discrete,
+    /// Distributed over the whole length (stiffness N/m², damping N·s/m² per unit length).
+    Continuous,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingConfig {
+    pub upper: String,
+    /// A layer name, or `"ground"`.
+    pub lower: String,
+    pub kind: CouplingKind,
+    pub stiffness: f64,
+    #[serde(default)]
+    pub damping: f64,
+    /// Point positions for discrete couplings (m).
+    #[serde(default)]
+    pub positions: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Hermite + sine modes, all global, no correction (article §2.1).
+    #[default]
+    Modal,
+    /// Modal plus the FE–SEA correction of the local rail modes (article §2.2).
+    Hybrid,
+    /// Conventional cubic Hermite beam elements (article §3.3 reference).
+    Fem,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretisationConfig {
+    #[serde(default)]
+    pub method: Method,
+    /// Elements per layer of the FEM discretisation.
+    #[serde(default = "default_fem_elements")]
+    pub fem_elements: usize,
+    /// Representative excitation frequency ω_r (rad/s) of the FE–SEA correction; `None` uses
+    /// the documented default.
+    #[serde(default)]
+    pub omega_r: Option<f64>,
+}
+
+fn default_fem_elements() -> usize {
+    251
+}
+
+impl Default for DiscretisationConfig {
+    fn default() -> Self {
+        Self { method: Method::Modal, fem_elements: default_fem_elements(), omega_r: None }
+    }
+}
+
+/// Zhai's 10-DOF vertical car (model.md §3). Suspension constants are per bogie (secondary)
+/// and per wheelset (primary), both sides lumped.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleConfig {
+    /// Car body mass (kg) and pitch inertia (kg·m²).
+    pub m_c: f64,
+    pub j_c: f64,
+    /// Bogie mass (kg) and pitch inertia (kg·m²).
+    pub m_t: f64,
+    pub j_t: f64,
+    /// Wheelset mass (kg).
+    pub m_w: f64,
+    /// Secondary suspension per bogie (N/m, N·s/m).
+    pub k_s: f64,
+    pub c_s: f64,
+    /// Primary suspension per wheelset (N/m, N·s/m).
+    pub k_p: f64,
+    pub c_p: f64,
+    /// Half distance between bogie centres and half wheelbase (m).
+    pub l_c: f64,
+    pub l_t: f64,
+    /// Wheel radius (m); sets the Hertz constant G = 4.57·R^−0.149·1e−8 m/N^(2/3).
+    pub wheel_radius: f64,
+    /// Overrides the Hertz constant G (m/N^(2/3)).
+    #[serde(default)]
+    pub contact_constant: Option<f64>,
+    /// Position of the leading wheelset at t = 0 (m).
+    pub x_front: f64,
+    /// Identical rails sharing each wheelset's load. The modelled top layer is one of them
+    /// and carries 1/`rails` of every axle load through its own Hertz spring (2: a full car
+    /// on one of its two rails, which is what the article's 0.97 mm rail / 0.46 mm slab
+    /// amplitudes imply).
+    #[serde(default = "default_rails")]
+    pub rails: usize,
+}
+
+fn default_rails() -> usize {
+    2
+}
+
+impl VehicleConfig {
+    pub fn hertz_constant(&self) -> f64 {
+        self.contact_constant
+            .unwrap_or_else(|| 4.57e-8 * self.wheel_radius.powf(-0.149))
+    }
+
+    /// Wheelset positions at t = 0, front to rear (wheels 1..4).
+    pub fn wheel_offsets(&self) -> [f64; 4] {
+        let xc = self.x_front - self.l_c - self.l_t;
+        [xc + self.l_c + self.l_t, xc + self.l_c - self.l_t, xc - self.l_c + self.l_t, xc - self.l_c - self.l_t]
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MovingForceConfig {
+    /// Force (N), positive downward.
+    pub magnitude: f64,
+    /// Position at t = 0 (m).
+    pub x0: f64,
+    /// Layer the force acts on; the top layer when absent.
+    #[serde(default)]
+    pub layer: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum InitialState {
+    /// Static equilibrium of the loaded system (contact included).
+    #[default]
+    Static,
+    /// Structure at rest and undeformed (Frýba's zero initial conditions); vehicles still
+    /// start in their own static equilibrium on the undeformed track.
+    Rest,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    /// Newmark time step (s).
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// End time (s). Default: when the leading wheel (or force) reaches L − `end_margin`.
+    #[serde(default)]
+    pub t_end: Option<f64>,
+    /// Distance kept between the leading wheel and the end of the structure for the default
+    /// end time (m).
+    #[serde(default = "default_end_margin")]
+    pub end_margin: f64,
+    /// Gravitational acceleration (m/s²).
+    #[serde(default = "default_gravity")]
+    pub gravity: f64,
+    /// Contact iteration stops when every wheel force changes by less than
+    /// `contact_tol` × (static wheel load) in one Newton update.
+    #[serde(default = "default_contact_tol")]
+    pub contact_tol: f64,
+    #[serde(default = "default_contact_max_iter")]
+    pub contact_max_iter: usize,
+    #[serde(default)]
+    pub initial_state: InitialState,
+}
+
+fn default_dt() -> f64 {
+    5e-5
+}
+fn default_end_margin() -> f64 {
+    1.0
+}
+fn default_gravity() -> f64 {
+    9.81
+}
+fn default_contact_tol() -> f64 {
+    1e-10
+}
+fn default_contact_max_iter() -> usize {
+    50
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            dt: default_dt(),
+            t_end: None,
+            end_margin: default_end_margin(),
+            gravity: default_gravity(),
+            contact_tol: default_contact_tol(),
+            contact_max_iter: default_contact_max_iter(),
+            initial_state: InitialState::Static,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Observation points (m); empty means x = L/2. Metrics use the first point.
+    #[serde(default)]
+    pub points: Vec<f64>,
+}
+
+/// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TidConfig {
+    /// Inertance b_t (kg), stiffness k_t (N/m), damping c_t (N·s/m).
+    pub inertance: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub count: usize,
+    pub x0: f64,
+    pub spacing: f64,
+    #[serde(default = "default_tid_upper")]
+    pub upper: String,
+    #[serde(default = "default_tid_lower")]
+    pub lower: String,
+}
+
+fn default_tid_upper() -> String {
+    "rail".into()
+}
+fn default_tid_lower() -> String {
+    "slab".into()
+}
+
+/// Sampled irregularity r(x) (m, positive = dip) on a uniform grid, linearly interpolated.
+#[derive(Debug, Clone, Default)]
+pub struct Profile {
+    pub x0: f64,
+    pub dx: f64,
+    pub values: Vec<f64>,
+}
+
+impl Profile {
+    pub fn flat() -> Self {
+        Self { x0: 0.0, dx: 1.0, values: Vec::new() }
+    }
+
+    /// r(x); an empty profile is a perfectly smooth rail.
+    #[inline]
+    pub fn at(&self, x: f64) -> f64 {
+        let n = self.values.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let s = (x - self.x0) / self.dx;
+        let i = (s.floor() as isize).clamp(0, n as isize - 2) as usize;
+        let w = s - i as f64;
+        self.values[i] * (1.0 - w) + self.values[i + 1] * w
+    }
+
+    fn x_last(&self) -> f64 {
+        self.x0 + self.dx * (self.values.len() as f64 - 1.0)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation
+// ---------------------------------------------------------------------------------------------
+
+fn finite(field: &str, v: f64) -> Result<f64> {
+    if v.is_finite() { Ok(v) } else { Err(VtbError::config(field, v, "must be a finite number")) }
+}
+
+fn positive(field: &str, v: f64) -> Result<f64> {
+    finite(field, v)?;
+    if v > 0.0 { Ok(v) } else { Err(VtbError::config(field, v, "must be > 0")) }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<f64> {
+    finite(field, v)?;
+    if v >= 0.0 { Ok(v) } else { Err(VtbError::config(field, v, "must be >= 0")) }
+}
+
+fn within(field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
+    finite(field, v)?;
+    if v >= lo - 1e-12 && v <= hi + 1e-12 {
+        Ok(v)
+    } else {
+        Err(VtbError::config(field, v, format!("must lie within [{lo}, {hi}] ({what})")))
+    }
+}
+
+/// Upper bound on time steps of one run (guards against hangs and memory blow-ups).
+pub const MAX_STEPS: usize = 20_000_000;
+/// Upper bound on sine modes of one layer.
+pub const MAX_MODES: usize = 20_000;
+/// Upper bound on FEM elements per layer.
+pub const MAX_ELEMENTS: usize = 200_000;
+
+impl Config {
+    pub fn from_json(text: &str) -> Result<Config> {
+        serde_json::from_str(text).map_err(|e| VtbError::config("<config>", "(json)", e.to_string()))
+    }
+
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("config serialises")
+    }
+
+    pub fn layer_index(&self, name: &str) -> Option<usize> {
+        self.structure.layers.iter().position(|l| l.name == name)
+    }
+
+    /// Number of time steps and the step actually used (the end time is rounded to a whole
+    /// number of steps).
+    pub fn n_steps(&self) -> usize {
+        let t_end = self.t_end();
+        (t_end / self.solver.dt).round().max(1.0) as usize
+    }
+
+    /// End time of the run (s), explicit or from the leading wheel/force reaching
+    /// L − end_margin.
+    pub fn t_end(&self) -> f64 {
+        if let Some(t) = self.solver.t_end {
+            return t;
+        }
+        let lead = self
+            .vehicles
+            .iter()
+            .map(|v| v.x_front)
+            .chain(self.forces.iter().map(|f| f.x0))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if self.speed > 0.0 && lead.is_finite() {
+            ((self.structure.length - self.solver.end_margin - lead) / self.speed).max(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// Observation points, defaulting to mid-length.
+    pub fn observation_points(&self) -> Vec<f64> {
+        if self.output.points.is_empty() {
+            vec![0.5 * self.structure.length]
+        } else {
+            self.output.points.clone()
+        }
+    }
+
+    /// Checks every field; the first problem found is returned with its dotted path.
+    pub fn validate(&self, profile: &Profile) -> Result<()> {
+        let s = &self.structure;
+        let length = positive("structure.length", s.length)?;
+        if s.layers.is_empty() {
+            return Err(VtbError::config("structure.layers", "[]", "at least one layer is required"));
+        }
+        for (i, l) in s.layers.iter().enumerate() {
+            let p = format!("structure.layers[{i}]");
+            if l.name.is_empty() || l.name == GROUND {
+                return Err(VtbError::config(format!("{p}.name"), format!("{:?}", l.name), "must be a non-empty name other than \"ground\""));
+            }
+            if s.layers[..i].iter().any(|o| o.name == l.name) {
+                return Err(VtbError::config(format!("{p}.name"), format!("{:?}", l.name), "layer names must be unique"));
+            }
+            positive(&format!("{p}.density"), l.density)?;
+            positive(&format!("{p}.area"), l.area)?;
+            positive(&format!("{p}.youngs_modulus"), l.youngs_modulus)?;
+            positive(&format!("{p}.inertia"), l.inertia)?;
+            if self.discretisation.method != Method::Fem {
+                if l.modes == 0 {
+                    return Err(VtbError::config(format!("{p}.modes"), 0, "at least one sine mode is required"));
+                }
+                if l.modes + l.local_modes > MAX_MODES {
+                    return Err(VtbError::config(format!("{p}.modes"), l.modes + l.local_modes, format!("modes + local_modes must be <= {MAX_MODES}")));
+                }
+            }
+            match l.damping {
+                RayleighConfig::Ratio { ratio, f1, f2 } => {
+                    let r = non_negative(&format!("{p}.damping.ratio"), ratio)?;
+                    if r >= 1.0 {
+                        return Err(VtbError::config(format!("{p}.damping.ratio"), r, "must be < 1"));
+                    }
+                    positive(&format!("{p}.damping.f1"), f1)?;
+                    positive(&format!("{p}.damping.f2"), f2)?;
+                    if f2 <= f1 {
+                        return Err(VtbError::config(format!("{p}.damping.f2"), f2, format!("must be > f1 = {f1}")));
+                    }
+                }
+                RayleighConfig::Coefficients { alpha, beta } => {
+                    non_negative(&format!("{p}.damping.alpha"), alpha)?;
+                    non_negative(&format!("{p}.damping.beta"), beta)?;
+                }
+            }
+        }
+        for (i, c) in s.couplings.iter().enumerate() {
+            let p = format!("structure.couplings[{i}]");
+            let upper = self.layer_index(&c.upper).ok_or_else(|| {
+                VtbError::config(format!("{p}.upper"), format!("{:?}", c.upper), "no layer of that name")
+            })?;
+            if c.lower != GROUND {
+                let lower = self.layer_index(&c.lower).ok_or_else(|| {
+                    VtbError::config(format!("{p}.lower"), format!("{:?}", c.lower), "no layer of that name (or \"ground\")")
+                })?;
+                if lower == upper {
+                    return Err(VtbError::config(format!("{p}.lower"), format!("{:?}", c.lower), "a layer cannot be coupled to itself"));
+                }
+            }
+            non_negative(&format!("{p}.stiffness"), c.stiffness)?;
+            non_negative(&format!("{p}.damping"), c.damping)?;
+            match c.kind {
+                CouplingKind::Discrete => {
+                    if c.positions.is_empty() {
+                        return Err(VtbError::config(format!("{p}.positions"), "[]", "a discrete coupling needs at least one position"));
+                    }
+                    for (j, &x) in c.positions.iter().enumerate() {
+                        within(&format!("{p}.positions[{j}]"), x, 0.0, length, "the structure")?;
+                    }
+                }
+                CouplingKind::Continuous => {
+                    if !c.positions.is_empty() {
+                        return Err(VtbError::config(format!("{p}.positions"), format!("{:?}", c.positions), "a continuous coupling takes no positions"));
+                    }
+                }
+            }
+        }
+        let d = &self.discretisation;
+        if d.method == Method::Fem && !(2..=MAX_ELEMENTS).contains(&d.fem_elements) {
+            return Err(VtbError::config("discretisation.fem_elements", d.fem_elements, format!("must be within [2, {MAX_ELEMENTS}]")));
+        }
+        if let Some(w) = d.omega_r {
+            positive("discretisation.omega_r", w)?;
+        }
+        if d.method == Method::Hybrid && s.layers[0].local_modes == 0 {
+            return Err(VtbError::config("structure.layers[0].local_modes", 0, "the hybrid method needs local modes on the top layer"));
+        }
+
+        let speed = non_negative("speed", self.speed)?;
+        let sv = &self.solver;
+        let dt = positive("solver.dt", sv.dt)?;
+        non_negative("solver.end_margin", sv.end_margin)?;
+        non_negative("solver.gravity", sv.gravity)?;
+        positive("solver.contact_tol", sv.contact_tol)?;
+        if sv.contact_max_iter == 0 {
+            return Err(VtbError::config("solver.contact_max_iter", 0, "must be >= 1"));
+        }
+        if let Some(t) = sv.t_end {
+            positive("solver.t_end", t)?;
+        } else if speed == 0.0 {
+            return Err(VtbError::config("solver.t_end", "None", "an end time is required when speed = 0"));
+        }
+        let t_end = self.t_end();
+        if !(t_end > 0.0) {
+            return Err(VtbError::config("solver.t_end", t_end, "the run would have no duration: the leading wheel/force starts within end_margin of the end of the structure"));
+        }
+        let steps = t_end / dt;
+        if steps > MAX_STEPS as f64 {
+            return Err(VtbError::config("solver.dt", dt, format!("t_end / dt = {steps:.3e} steps exceeds the limit of {MAX_STEPS}")));
+        }
+        let travel = speed * self.n_steps() as f64 * dt;
+
+        for (i, v) in self.vehicles.iter().enumerate() {
+            let p = format!("vehicles[{i}]");
+            for (name, val) in [("m_c", v.m_c), ("j_c", v.j_c), ("m_t", v.m_t), ("j_t", v.j_t), ("m_w", v.m_w), ("k_s", v.k_s), ("k_p", v.k_p), ("l_c", v.l_c), ("l_t", v.l_t), ("wheel_radius", v.wheel_radius)] {
+                positive(&format!("{p}.{name}"), val)?;
+            }
+            non_negative(&format!("{p}.c_s"), v.c_s)?;
+            non_negative(&format!("{p}.c_p"), v.c_p)?;
+            if v.l_t >= v.l_c {
+                return Err(VtbError::config(format!("{p}.l_t"), v.l_t, format!("half wheelbase must be smaller than l_c = {}", v.l_c)));
+            }
+            if v.rails == 0 {
+                return Err(VtbError::config(format!("{p}.rails"), 0, "must be >= 1"));
+            }
+            if let Some(g) = v.contact_constant {
+                positive(&format!("{p}.contact_constant"), g)?;
+            }
+            finite(&format!("{p}.x_front"), v.x_front)?;
+            let offs = v.wheel_offsets();
+            let (rear, front) = (offs[3], offs[0] + travel);
+            if rear < -1e-9 {
+                return Err(VtbError::config(format!("{p}.x_front"), v.x_front, format!("the rear wheelset starts at x = {rear:.4} m, off the structure [0, {length}]")));
+            }
+            if front > length + 1e-9 {
+                return Err(VtbError::config(format!("{p}.x_front"), v.x_front, format!("the leading wheelset would reach x = {front:.4} m by t_end = {t_end:.4} s, beyond the structure length {length}")));
+            }
+            if !profile.values.is_empty() && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9) {
+                return Err(VtbError::config("irregularity", format!("[{}, {}]", profile.x0, profile.x_last()), format!("the profile must cover the wheel travel [{rear:.4}, {front:.4}] m of vehicle {i}")));
+            }
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            let p = format!("forces[{i}]");
+            finite(&format!("{p}.magnitude"), f.magnitude)?;
+            within(&format!("{p}.x0"), f.x0, 0.0, length, "the structure")?;
+            if f.x0 + travel > length + 1e-9 {
+                return Err(VtbError::config(format!("{p}.x0"), f.x0, format!("the force would reach x = {:.4} m by t_end, beyond the structure length {length}", f.x0 + travel)));
+            }
+            if let Some(layer) = &f.layer {
+                if self.layer_index(layer).is_none() {
+                    return Err(VtbError::config(format!("{p}.layer"), format!("{layer:?}"), "no layer of that name"));
+                }
+            }
+        }
+        if self.vehicles.is_empty() && self.forces.is_empty() {
+            return Err(VtbError::config("vehicles", "[]", "nothing loads the structure: give at least one vehicle or moving force"));
+        }
+        for (i, &x) in self.output.points.iter().enumerate() {
+            within(&format!("output.points[{i}]"), x, 0.0, length, "the structure")?;
+        }
+        if !profile.values.is_empty() {
+            positive("irregularity.dx", profile.dx)?;
+            finite("irregularity.x0", profile.x0)?;
+            if profile.values.len() < 2 {
+                return Err(VtbError::config("irregularity", profile.values.len(), "a sampled profile needs at least 2 samples"));
+            }
+            if let Some((j, v)) = profile.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(VtbError::config(format!("irregularity[{j}]"), v, "must be finite"));
+            }
+        }
+        if let Some(t) = &self.tids {
+            self.validate_tids(t, length)?;
+        }
+        Ok(())
+    }
+
+    fn validate_tids(&self, t: &TidConfig, length: f64) -> Result<()> {
+        positive("tids.inertance", t.inertance)?;
+        non_negative("tids.stiffness", t.stiffness)?;
+        non_negative("tids.damping", t.damping)?;
+        if t.count == 0 {
+            return Err(VtbError::config("tids.count", 0, "must be >= 1 (omit `tids` for no dampers)"));
+        }
+        within("tids.x0", t.x0, 0.0, length, "the structure")?;
+        if t.count > 1 {
+            positive("tids.spacing", t.spacing)?;
+            let last = t.x0 + t.spacing * (t.count - 1) as f64;
+            if last > length + 1e-9 {
+                return Err(VtbError::config("tids.count", t.count, format!("the last damper would sit at x = {last:.4} m, beyond the structure length {length}")));
+            }
+        }
+        let upper = self.layer_index(&t.upper).ok_or_else(|| VtbError::config("tids.upper", format!("{:?}", t.upper), "no layer of that name"))?;
+        let lower = self.layer_index(&t.lower).ok_or_else(|| VtbError::config("tids.lower", format!("{:?}", t.lower), "no layer of that name"))?;
+        if upper == lower {
+            return Err(VtbError::config("tids.lower", format!("{:?}", t.lower), "must differ from tids.upper"));
+        }
+        Ok(())
+    }
+}

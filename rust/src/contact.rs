@@ -1,0 +1,187 @@
+//! Nonlinear Hertz wheel–rail contact (model.md §4) and the per-step contact solve.
+//!
+//! P = (δ/G)^{3/2} for a compression δ > 0, P = 0 otherwise (loss of contact). Within a time
+//! step the compressions are affine in the unknown forces, δ = δ_free − A·P, where A is the
+//! compliance of wheels and rail over one step (vehicle part + rail part at the wheel
+//! positions). The forces solve P = h(δ_free − A·P), found by Newton's method on the few
+//! wheel unknowns, never by re-solving the structure.
+
+use crate::error::{Result, VtbError};
+
+/// Contact force (N) of a compression δ (m).
+#[inline]
+pub fn force(g: f64, delta: f64) -> f64 {
+    if delta > 0.0 { (delta / g).powf(1.5) } else { 0.0 }
+}
+
+/// dP/dδ (N/m); k_H = 3·P^{1/3}/(2G) at a load P.
+#[inline]
+pub fn stiffness(g: f64, delta: f64) -> f64 {
+    if delta > 0.0 { 1.5 * delta.sqrt() / g.powf(1.5) } else { 0.0 }
+}
+
+/// Compression δ = G·P^{2/3} carrying a load P.
+#[inline]
+pub fn compression(g: f64, p: f64) -> f64 {
+    g * p.max(0.0).powf(2.0 / 3.0)
+}
+
+/// Newton solver for P = h(δ_free − A·P) with preallocated work space.
+///
+/// Converged when every wheel satisfies |P_i − h(δ_i)| ≤ `tol`·P_ref,i, P_ref being the static
+/// wheel load. A backtracking line search keeps the iteration monotone across the kink of
+/// the loss-of-contact law.
+#[derive(Clone, Debug)]
+pub struct ContactSolver {
+    n: usize,
+    /// Hertz constant of each wheel.
+    pub g: Vec<f64>,
+    /// Force scale of the convergence test (static wheel loads).
+    pub p_ref: Vec<f64>,
+    pub tol: f64,
+    pub max_iter: usize,
+    jac: Vec<f64>,
+    res: Vec<f64>,
+    dp: Vec<f64>,
+    delta: Vec<f64>,
+    trial: Vec<f64>,
+}
+
+/// Residual R = P − h(δ_free − A·P) into `res` (and δ into `delta`); returns max |R_i|/P_ref,i.
+fn residual(p: &[f64], delta_free: &[f64], a: &[f64], g: &[f64], p_ref: &[f64], delta: &mut [f64], res: &mut [f64]) -> f64 {
+    let n = p.len();
+    let mut worst: f64 = 0.0;
+    for i in 0..n {
+        let mut d = delta_free[i];
+        for j in 0..n {
+            d -= a[i * n + j] * p[j];
+        }
+        delta[i] = d;
+        res[i] = p[i] - force(g[i], d);
+        worst = worst.max(res[i].abs() / p_ref[i]);
+    }
+    worst
+}
+
+impl ContactSolver {
+    pub fn new(g: Vec<f64>, p_ref: Vec<f64>, tol: f64, max_iter: usize) -> Self {
+        let n = g.len();
+        Self { n, g, p_ref, tol, max_iter, jac: vec![0.0; n * n], res: vec![0.0; n], dp: vec![0.0; n], delta: vec![0.0; n], trial: vec![0.0; n] }
+    }
+
+    /// Solves for the forces `p` (initial guess in, solution out); `a` is row-major n×n.
+    /// Returns the number of Newton iterations taken.
+    pub fn solve(&mut self, p: &mut [f64], delta_free: &[f64], a: &[f64], time: f64, step: usize) -> Result<usize> {
+        let n = self.n;
+        let mut rnorm = residual(p, delta_free, a, &self.g, &self.p_ref, &mut self.delta, &mut self.res);
+        if rnorm <= self.tol {
+            return Ok(0);
+        }
+        for it in 1..=self.max_iter {
+            // J = I + diag(h′(δ))·A
+            for i in 0..n {
+                let kh = stiffness(self.g[i], self.delta[i]);
+                for j in 0..n {
+                    self.jac[i * n + j] = kh * a[i * n + j] + if i == j { 1.0 } else { 0.0 };
+                }
+                self.dp[i] = -self.res[i];
+            }
+            lu_solve_in_place(&mut self.jac, &mut self.dp, n);
+            let mut lambda = 1.0;
+            let mut accepted = false;
+            for _ in 0..40 {
+                for i in 0..n {
+                    self.trial[i] = p[i] + lambda * self.dp[i];
+                }
+                let r_new = residual(&self.trial, delta_free, a, &self.g, &self.p_ref, &mut self.delta, &mut self.res);
+                if r_new < rnorm || r_new <= self.tol {
+                    p.copy_from_slice(&self.trial);
+                    rnorm = r_new;
+                    accepted = true;
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            if !accepted {
+                break;
+            }
+            if rnorm <= self.tol {
+                return Ok(it);
+            }
+        }
+        let residual = (0..n).map(|i| (self.res[i] / self.p_ref[i]).abs() * self.p_ref[i]).fold(0.0, f64::max);
+        Err(VtbError::ContactNotConverged { time, step, residual, iterations: self.max_iter })
+    }
+}
+
+/// Solves J·x = b (row-major n×n, partial pivoting), overwriting J.
+pub fn lu_solve_in_place(j: &mut [f64], b: &mut [f64], n: usize) {
+    for col in 0..n {
+        let mut piv = col;
+        for r in col + 1..n {
+            if j[r * n + col].abs() > j[piv * n + col].abs() {
+                piv = r;
+            }
+        }
+        if piv != col {
+            for c in 0..n {
+                j.swap(col * n + c, piv * n + c);
+            }
+            b.swap(col, piv);
+        }
+        let d = j[col * n + col];
+        for r in col + 1..n {
+            let f = j[r * n + col] / d;
+            if f != 0.0 {
+                for c in col..n {
+                    j[r * n + c] -= f * j[col * n + c];
+                }
+                b[r] -= f * b[col];
+            }
+        }
+    }
+    for r in (0..n).rev() {
+        let mut s = b[r];
+        for c in r + 1..n {
+            s -= j[r * n + c] * b[c];
+        }
+        b[r] = s / j[r * n + r];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// physics-data.md §2: G = 4.57·R^−0.149·1e−8; R = 0.46 m → δ0 = 87.1 µm and
+    /// k_H = 1.21e9 N/m at 70 kN; R = 0.43 m → 88.0 µm, 1.19e9 N/m.
+    #[test]
+    fn hertz_static_compression_and_linearised_stiffness() {
+        for (r, g_want, d_want, k_want) in [(0.46, 5.131e-8, 87.1e-6, 1.21e9), (0.43, 5.182e-8, 88.0e-6, 1.19e9)] {
+            let g = 4.57e-8 * f64::powf(r, -0.149);
+            assert!((g - g_want).abs() < 0.001 * g_want, "G({r}) = {g}");
+            let d0 = compression(g, 70e3);
+            assert!((d0 - d_want).abs() < 0.002 * d_want, "δ0 = {d0}");
+            assert!((force(g, d0) - 70e3).abs() < 1e-6);
+            let kh = stiffness(g, d0);
+            assert!((kh - k_want).abs() < 0.01 * k_want, "k_H = {kh}");
+            // k_H = 3·P^{1/3}/(2G)
+            assert!((kh - 1.5 * f64::powf(70e3, 1.0 / 3.0) / g).abs() < 1e-6 * kh);
+        }
+    }
+
+    #[test]
+    fn newton_solves_coupled_wheels_and_loss_of_contact() {
+        let g = vec![5.13e-8; 2];
+        let mut s = ContactSolver::new(g.clone(), vec![7e4; 2], 1e-12, 50);
+        let a = [2e-10, 5e-11, 5e-11, 3e-10];
+        // Wheel 1 pressed, wheel 2 lifted (negative free compression).
+        let dfree = [1e-4, -2e-5];
+        let mut p = [0.0, 1e4];
+        s.solve(&mut p, &dfree, &a, 0.0, 0).unwrap();
+        assert_eq!(p[1], 0.0);
+        let d0 = dfree[0] - a[0] * p[0];
+        assert!((p[0] - force(g[0], d0)).abs() < 1e-6);
+        assert!(p[0] > 0.0);
+    }
+}

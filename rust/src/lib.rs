@@ -1,0 +1,34 @@
+//! vtb — vehicle–track–bridge vertical dynamics.
+//!
+//! The core library: beam layers in a modal (Hermite + sine) or finite-element basis,
+//! couplings, a 10-DOF car, Hertz contact and Newmark integration. It has no Python types;
+//! the `vtb._core` extension module in `rust/bindings` wraps it.
+//!
+//! ```no_run
+//! use vtb::{Config, Profile, simulate};
+//! let cfg = Config::from_json(&std::fs::read_to_string("config.json").unwrap()).unwrap();
+//! let result = simulate(&cfg, &Profile::flat(), None).unwrap();
+//! println!("{:?}", result.metrics());
+//! ```
+
+pub mod basis;
+pub mod config;
+pub mod contact;
+pub mod couplings;
+pub mod error;
+pub mod indices;
+pub mod integrator;
+pub mod layers;
+pub mod model;
+pub mod presets;
+pub mod results;
+pub mod simulate;
+pub mod sparse;
+pub mod structure;
+pub mod vehicle;
+
+pub use config::{Config, Profile};
+pub use error::{Result, VtbError};
+pub use model::Model;
+pub use results::RunResult;
+pub use simulate::{Job, run_batch, simulate};

@@ -1,0 +1,24 @@
+//! A validated, assembled model: configuration, irregularity, structure matrices and cars.
+
+use crate::config::{Config, Profile};
+use crate::error::Result;
+use crate::structure::Structure;
+use crate::vehicle::Car;
+
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub cfg: Config,
+    pub profile: Profile,
+    pub structure: Structure,
+    pub cars: Vec<Car>,
+}
+
+impl Model {
+    /// Validates `cfg` against `profile` and assembles the structure.
+    pub fn new(cfg: Config, profile: Profile) -> Result<Self> {
+        cfg.validate(&profile)?;
+        let structure = Structure::build(&cfg)?;
+        let cars = cfg.vehicles.iter().map(Car::new).collect();
+        Ok(Self { cfg, profile, structure, cars })
+    }
+}

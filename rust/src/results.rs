@@ -1,0 +1,118 @@
+//! The histories of one run and the metrics derived from them.
+
+use crate::config::Config;
+use crate::indices::{amplitude, rms, settle_time};
+use crate::structure::Structure;
+use crate::vehicle::N_DOF;
+use std::collections::BTreeMap;
+
+/// A period during which a wheel had no contact (P = 0). `t_end` is `None` if contact was
+/// not regained before the end of the run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactLoss {
+    pub wheel: usize,
+    pub t_start: f64,
+    pub t_end: Option<f64>,
+}
+
+/// Histories sampled at t = i·dt, i = 0..=n_steps, stored time-major.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    pub dt: f64,
+    pub n_steps: usize,
+    pub layer_names: Vec<String>,
+    /// Observation points (m).
+    pub points: Vec<f64>,
+    /// Displacement (m, down positive, from the unloaded structure) at
+    /// `[(step·n_layers + layer)·n_points + point]`.
+    pub disp: Vec<f64>,
+    /// Acceleration (m/s²), same layout as `disp`.
+    pub acc: Vec<f64>,
+    pub n_cars: usize,
+    /// Vehicle DOFs relative to the static state at t = 0 (m, rad) at `[(step·n_cars + car)·10 + dof]`.
+    pub vehicle_disp: Vec<f64>,
+    /// Vehicle accelerations (m/s², rad/s²), same layout.
+    pub vehicle_acc: Vec<f64>,
+    pub n_wheels: usize,
+    /// Contact force on the modelled rail (N) at `[step·n_wheels + wheel]`.
+    pub contact_force: Vec<f64>,
+    pub contact_loss: Vec<ContactLoss>,
+}
+
+impl RunResult {
+    pub fn new(cfg: &Config, st: &Structure, n_steps: usize, n_points: usize, n_cars: usize, n_wheels: usize) -> Self {
+        let nl = st.layers.len();
+        let len = n_steps + 1;
+        Self {
+            dt: cfg.solver.dt,
+            n_steps,
+            layer_names: st.layers.iter().map(|l| l.name.clone()).collect(),
+            points: cfg.observation_points(),
+            disp: vec![0.0; len * nl * n_points],
+            acc: vec![0.0; len * nl * n_points],
+            n_cars,
+            vehicle_disp: vec![0.0; len * n_cars * N_DOF],
+            vehicle_acc: vec![0.0; len * n_cars * N_DOF],
+            n_wheels,
+            contact_force: vec![0.0; len * n_wheels],
+            contact_loss: Vec::new(),
+        }
+    }
+
+    fn column(data: &[f64], stride: usize, offset: usize) -> Vec<f64> {
+        data.iter().skip(offset).step_by(stride).copied().collect()
+    }
+
+    /// Displacement history of `layer` at observation point `point`.
+    pub fn layer_disp(&self, layer: usize, point: usize) -> Vec<f64> {
+        let np = self.points.len();
+        Self::column(&self.disp, self.layer_names.len() * np, layer * np + point)
+    }
+
+    pub fn layer_acc(&self, layer: usize, point: usize) -> Vec<f64> {
+        let np = self.points.len();
+        Self::column(&self.acc, self.layer_names.len() * np, layer * np + point)
+    }
+
+    pub fn vehicle_dof_disp(&self, car: usize, dof: usize) -> Vec<f64> {
+        Self::column(&self.vehicle_disp, self.n_cars * N_DOF, car * N_DOF + dof)
+    }
+
+    pub fn vehicle_dof_acc(&self, car: usize, dof: usize) -> Vec<f64> {
+        Self::column(&self.vehicle_acc, self.n_cars * N_DOF, car * N_DOF + dof)
+    }
+
+    pub fn wheel_force(&self, wheel: usize) -> Vec<f64> {
+        Self::column(&self.contact_force, self.n_wheels, wheel)
+    }
+
+    /// Metrics in SI units at the first observation point: for every layer
+    /// `{name}_disp_max`, `{name}_acc_max`, `{name}_acc_rms`, `{name}_acc_settle` (s, 5 %
+    /// rule); for the first car `car_disp_max`, `car_acc_max`, `car_acc_rms`; and
+    /// `contact_force_max`, `contact_force_min`, `contact_loss_events`.
+    pub fn metrics(&self) -> BTreeMap<String, f64> {
+        let mut m = BTreeMap::new();
+        for (li, name) in self.layer_names.iter().enumerate() {
+            let d = self.layer_disp(li, 0);
+            let a = self.layer_acc(li, 0);
+            m.insert(format!("{name}_disp_max"), amplitude(&d));
+            m.insert(format!("{name}_acc_max"), amplitude(&a));
+            m.insert(format!("{name}_acc_rms"), rms(&a));
+            m.insert(format!("{name}_acc_settle"), settle_time(&a, self.dt, 0.05));
+        }
+        if self.n_cars > 0 {
+            let d = self.vehicle_dof_disp(0, 0);
+            let a = self.vehicle_dof_acc(0, 0);
+            m.insert("car_disp_max".into(), amplitude(&d));
+            m.insert("car_acc_max".into(), amplitude(&a));
+            m.insert("car_acc_rms".into(), rms(&a));
+        }
+        if self.n_wheels > 0 {
+            let (lo, hi) = self.contact_force.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+            m.insert("contact_force_max".into(), hi);
+            m.insert("contact_force_min".into(), lo);
+            m.insert("contact_loss_events".into(), self.contact_loss.len() as f64);
+        }
+        m
+    }
+}

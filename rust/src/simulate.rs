@@ -1,0 +1,349 @@
+//! One coupled run (track + cars + contact), and many runs in parallel.
+
+use crate::basis::Shape;
+use crate::config::{Config, InitialState, Profile};
+use crate::contact::{ContactSolver, compression};
+use crate::error::{Result, VtbError};
+use crate::integrator::{GW, Gathered, Newmark, PortBlock};
+use crate::model::Model;
+use crate::results::{ContactLoss, RunResult};
+use crate::sparse::{Assembler, CsrMatrix, Ldlt};
+use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Validates, assembles and integrates one configuration.
+pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+    let model = Model::new(cfg.clone(), profile.clone())?;
+    Simulation::new(&model)?.run(cancel)
+}
+
+/// One job of a batch: a configuration and its (possibly shared) irregularity profile.
+#[derive(Clone, Debug)]
+pub struct Job {
+    pub config: Config,
+    pub profile: Arc<Profile>,
+}
+
+/// Runs the jobs in parallel on the current rayon pool and returns each job's metrics or its
+/// error, in input order. `done` counts finished jobs (for progress reporting).
+pub fn run_batch(jobs: &[Job], cancel: Option<&AtomicBool>, done: Option<&AtomicUsize>) -> Vec<Result<BTreeMap<String, f64>>> {
+    jobs.par_iter()
+        .map(|job| {
+            let r = simulate(&job.config, &job.profile, cancel).map(|res| res.metrics());
+            if let Some(d) = done {
+                d.fetch_add(1, Ordering::Relaxed);
+            }
+            r
+        })
+        .collect()
+}
+
+/// A constant force moving with the common speed.
+#[derive(Clone, Copy, Debug)]
+struct Mover {
+    layer: usize,
+    x0: f64,
+    magnitude: f64,
+}
+
+/// A car's own Newmark stepper; its contact ports are the wheelset DOFs.
+struct CarRun {
+    car: Car,
+    nm: Newmark,
+    m: CsrMatrix,
+    k: CsrMatrix,
+    ports: PortBlock,
+    /// Wheelset compliance over one step for unit port forces (constant).
+    compliance: [[f64; GW]; GW],
+    gravity: Vec<f64>,
+    f_prev: Vec<f64>,
+    z0: Vec<f64>,
+}
+
+impl CarRun {
+    fn new(car: &Car, dt: f64, g: f64) -> Result<Self> {
+        let dense = |m: &[[f64; N_DOF]; N_DOF]| {
+            let mut a = Assembler::new(N_DOF);
+            for i in 0..N_DOF {
+                for j in 0..N_DOF {
+                    a.add(i, j, m[i][j]);
+                }
+            }
+            a.finish()
+        };
+        let mut am = Assembler::new(N_DOF);
+        for i in 0..N_DOF {
+            am.add(i, i, car.mass[i]);
+        }
+        let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
+        let mut nm = Newmark::new(&m, &c, &k, dt)?;
+        for i in 0..N_DOF {
+            nm.observe(&Shape { start: i, values: vec![1.0] });
+        }
+        let mut ports = PortBlock::new(N_DOF);
+        for w in 0..N_WHEELS {
+            ports.set(w, &Gathered { idx: vec![nm.inv()[WHEEL0 + w]], val: vec![1.0] });
+        }
+        nm.forward_ports(&mut ports);
+        let compliance = nm.port_compliance(&ports, &ports);
+        let gravity = nm.to_permuted(&car.gravity(g));
+        Ok(Self { car: car.clone(), nm, m, k, ports, compliance, f_prev: gravity.clone(), gravity, z0: vec![0.0; N_DOF] })
+    }
+}
+
+/// The state of one coupled run.
+pub struct Simulation<'m> {
+    model: &'m Model,
+    track: Newmark,
+    /// Per layer: position in elimination order of each layer DOF.
+    pmap: Vec<Vec<usize>>,
+    f_prev: Vec<f64>,
+    f_next: Vec<f64>,
+    movers: Vec<Mover>,
+    cars: Vec<CarRun>,
+    /// Rail shape vectors at the wheels, one block per car.
+    track_ports: Vec<PortBlock>,
+    contact: ContactSolver,
+    /// Contact force of each wheel on the modelled rail (N).
+    p: Vec<f64>,
+    shape: Shape,
+    n_steps: usize,
+}
+
+impl<'m> Simulation<'m> {
+    pub fn new(model: &'m Model) -> Result<Self> {
+        let cfg = &model.cfg;
+        let st = &model.structure;
+        let dt = cfg.solver.dt;
+        let mut track = Newmark::new(&st.m, &st.c, &st.k, dt)?;
+        let pmap = st.layers.iter().map(|l| (0..l.n_dofs()).map(|k| track.inv()[l.offset + k]).collect()).collect();
+        for li in 0..st.layers.len() {
+            for x in cfg.observation_points() {
+                track.observe(&st.shape(li, x));
+            }
+        }
+        let movers = cfg
+            .forces
+            .iter()
+            .map(|f| Mover { layer: f.layer.as_ref().and_then(|l| cfg.layer_index(l)).unwrap_or(0), x0: f.x0, magnitude: f.magnitude })
+            .collect();
+        let cars = model.cars.iter().map(|c| CarRun::new(c, dt, cfg.solver.gravity)).collect::<Result<Vec<_>>>()?;
+        let nw = cars.len() * N_WHEELS;
+        let g: Vec<f64> = cars.iter().flat_map(|c| [c.car.hertz_g; N_WHEELS]).collect();
+        let contact = ContactSolver::new(g, vec![1.0; nw], cfg.solver.contact_tol, cfg.solver.contact_max_iter);
+        let n = st.n_dofs;
+        let shape_len = st.layers.iter().map(|l| l.basis.shape_len()).max().unwrap_or(0);
+        Ok(Self {
+            model,
+            pmap,
+            f_prev: vec![0.0; n],
+            f_next: vec![0.0; n],
+            movers,
+            track_ports: (0..cars.len()).map(|_| PortBlock::new(n)).collect(),
+            cars,
+            contact,
+            p: vec![0.0; nw],
+            shape: Shape { start: 0, values: vec![0.0; shape_len] },
+            n_steps: cfg.n_steps(),
+            track,
+        })
+    }
+
+    /// Adds w·N_layer(x) to the permuted force vector `f`.
+    fn scatter(model: &Model, pmap: &[Vec<usize>], shape: &mut Shape, f: &mut [f64], layer: usize, x: f64, w: f64) {
+        model.structure.layers[layer].basis.eval(x, shape);
+        let map = &pmap[layer];
+        for (k, v) in shape.values.iter().enumerate() {
+            f[map[shape.start + k]] += w * v;
+        }
+    }
+
+    /// Static (or rest) initial state of track and cars.
+    fn initial_state(&mut self) -> Result<()> {
+        let model = self.model;
+        let cfg = &model.cfg;
+        let st = &model.structure;
+        let g = cfg.solver.gravity;
+        // Wheel loads from the statics of each (statically determinate) car, per modelled rail.
+        let mut loads = Vec::with_capacity(self.p.len());
+        for c in &self.cars {
+            let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
+            loads.extend(r.iter().map(|ri| ri / c.car.rails));
+        }
+        if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
+            return Err(VtbError::config(format!("vehicles[{}]", i / N_WHEELS), l, format!("wheelset {} carries no static load", i % N_WHEELS + 1)));
+        }
+        self.contact.p_ref.clone_from(&loads);
+        self.p.clone_from(&loads);
+        self.f_prev.fill(0.0);
+        for m in &self.movers {
+            Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_prev, m.layer, m.x0, m.magnitude);
+        }
+        for (ci, c) in self.cars.iter().enumerate() {
+            for w in 0..N_WHEELS {
+                Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_prev, 0, c.car.wheel_x0[w], loads[ci * N_WHEELS + w]);
+            }
+        }
+        let n = st.n_dofs;
+        let f0 = self.track.to_original(&self.f_prev);
+        let u0 = match cfg.solver.initial_state {
+            InitialState::Static => Ldlt::new(&st.k).map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?.solve(&f0),
+            InitialState::Rest => vec![0.0; n],
+        };
+        let a0 = accelerations(&st.m, &st.k, &u0, &f0)?;
+        self.track.set_state(&u0, &vec![0.0; n], &a0, &st.k, &st.m);
+        for (ci, c) in self.cars.iter_mut().enumerate() {
+            let mut zw = [0.0; N_WHEELS];
+            for w in 0..N_WHEELS {
+                let x = c.car.wheel_x0[w];
+                let p0 = loads[ci * N_WHEELS + w];
+                zw[w] = st.displacement(0, x, &u0) + model.profile.at(x) + compression(c.car.hertz_g, p0);
+            }
+            let (_, z) = c.car.static_state(g, &zw);
+            let mut f = c.car.gravity(g);
+            for w in 0..N_WHEELS {
+                f[WHEEL0 + w] -= c.car.rails * loads[ci * N_WHEELS + w];
+            }
+            let av = accelerations(&c.m, &c.k, &z, &f)?;
+            c.nm.set_state(&z, &[0.0; N_DOF], &av, &c.k, &c.m);
+            c.z0 = z.to_vec();
+            c.f_prev = c.nm.to_permuted(&f);
+        }
+        Ok(())
+    }
+
+    /// Runs all steps; `cancel` is polled every 1024 steps.
+    pub fn run(mut self, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+        self.initial_state()?;
+        let model = self.model;
+        let cfg = &model.cfg;
+        let st = &model.structure;
+        let n_points = cfg.observation_points().len();
+        let nw = self.p.len();
+        let ncars = self.cars.len();
+        let mut res = RunResult::new(cfg, st, self.n_steps, n_points, ncars, nw);
+        self.record(&mut res, 0);
+        let dt = cfg.solver.dt;
+        let v = cfg.speed;
+        let mut amat = vec![0.0; nw * nw];
+        let mut delta_free = vec![0.0; nw];
+        let mut loss_open: Vec<Option<f64>> = vec![None; nw];
+
+        for step in 0..self.n_steps {
+            if step % 1024 == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return Err(VtbError::Cancelled);
+            }
+            let t1 = (step + 1) as f64 * dt;
+            self.f_next.fill(0.0);
+            for m in &self.movers {
+                Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_next, m.layer, m.x0 + v * t1, m.magnitude);
+            }
+            self.track.begin_step(&self.f_prev, &self.f_next);
+            for (ci, c) in self.cars.iter_mut().enumerate() {
+                let ports = &mut self.track_ports[ci];
+                ports.clear();
+                for w in 0..N_WHEELS {
+                    st.layers[0].basis.eval(c.car.wheel_x0[w] + v * t1, &mut self.shape);
+                    ports.set_shape(w, &self.shape, &self.pmap[0]);
+                }
+                self.track.forward_ports(ports);
+                c.nm.begin_step(&c.f_prev, &c.gravity);
+            }
+            // δ = δ_free − A·P with A = rails·(car compliance) + (rail compliance).
+            for ci in 0..ncars {
+                let c = &self.cars[ci];
+                let rail = self.track.free_port_disp(&self.track_ports[ci]);
+                let wheel = c.nm.free_port_disp(&c.ports);
+                for w in 0..N_WHEELS {
+                    let wi = ci * N_WHEELS + w;
+                    let x = c.car.wheel_x0[w] + v * t1;
+                    delta_free[wi] = wheel[w] - rail[w] - model.profile.at(x);
+                }
+                for cj in 0..ncars {
+                    let g = self.track.port_compliance(&self.track_ports[ci], &self.track_ports[cj]);
+                    for r in 0..N_WHEELS {
+                        for s in 0..N_WHEELS {
+                            let own = if ci == cj { c.car.rails * c.compliance[r][s] } else { 0.0 };
+                            amat[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = g[r][s] + own;
+                        }
+                    }
+                }
+            }
+            if nw > 0 {
+                self.contact.solve(&mut self.p, &delta_free, &amat, t1, step + 1)?;
+            }
+            for (ci, c) in self.cars.iter_mut().enumerate() {
+                let p: [f64; GW] = std::array::from_fn(|w| if w < N_WHEELS { self.p[ci * N_WHEELS + w] } else { 0.0 });
+                self.track.add_port_forces(&self.track_ports[ci], p);
+                c.nm.add_port_forces(&c.ports, p.map(|pw| -c.car.rails * pw));
+                c.nm.end_step();
+                c.f_prev.clone_from(&c.gravity);
+                for w in 0..N_WHEELS {
+                    c.f_prev[c.nm.inv()[WHEEL0 + w]] -= c.car.rails * p[w];
+                }
+            }
+            self.track.end_step();
+            // F_{n+1} becomes F_n: moving forces plus the converged wheel forces.
+            std::mem::swap(&mut self.f_prev, &mut self.f_next);
+            for (ci, ports) in self.track_ports.iter().enumerate() {
+                for w in 0..N_WHEELS {
+                    let pw = self.p[ci * N_WHEELS + w];
+                    let g = &ports.shapes[w];
+                    for (&i, &val) in g.idx.iter().zip(&g.val) {
+                        self.f_prev[i] += pw * val;
+                    }
+                }
+            }
+            for wi in 0..nw {
+                match (self.p[wi] == 0.0, loss_open[wi]) {
+                    (true, None) => loss_open[wi] = Some(t1),
+                    (false, Some(t0)) => {
+                        res.contact_loss.push(ContactLoss { wheel: wi, t_start: t0, t_end: Some(t1) });
+                        loss_open[wi] = None;
+                    }
+                    _ => {}
+                }
+            }
+            self.record(&mut res, step + 1);
+        }
+        for (wi, open) in loss_open.iter().enumerate() {
+            if let Some(t0) = open {
+                res.contact_loss.push(ContactLoss { wheel: wi, t_start: *t0, t_end: None });
+            }
+        }
+        Ok(res)
+    }
+
+    fn record(&self, res: &mut RunResult, step: usize) {
+        let no = self.track.n_observed();
+        for j in 0..no {
+            let (u, _, a) = self.track.observed(j);
+            res.disp[step * no + j] = u;
+            res.acc[step * no + j] = a;
+        }
+        let ncars = self.cars.len();
+        for (ci, c) in self.cars.iter().enumerate() {
+            for i in 0..N_DOF {
+                let (z, _, a) = c.nm.observed(i);
+                res.vehicle_disp[(step * ncars + ci) * N_DOF + i] = z - c.z0[i];
+                res.vehicle_acc[(step * ncars + ci) * N_DOF + i] = a;
+            }
+        }
+        let nw = self.p.len();
+        res.contact_force[step * nw..(step + 1) * nw].copy_from_slice(&self.p);
+    }
+}
+
+/// a = M⁻¹(F − K·u) for a subsystem at rest.
+fn accelerations(m: &CsrMatrix, k: &CsrMatrix, u: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+    let mut ku = vec![0.0; u.len()];
+    k.mul(u, &mut ku);
+    let r: Vec<f64> = f.iter().zip(&ku).map(|(a, b)| a - b).collect();
+    if r.iter().all(|v| *v == 0.0) {
+        return Ok(vec![0.0; u.len()]);
+    }
+    Ok(Ldlt::new(m)?.solve(&r))
+}
