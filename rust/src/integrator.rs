@@ -109,6 +109,8 @@ pub struct Newmark {
     s: Vec<f64>,
     /// Right-hand side during a step (forward-substituted); v̄ after `end_step`.
     z: Vec<f64>,
+    /// v̄, (4M − Δt²K)·v̄ and K·v̄ in the original numbering.
+    xo: Vec<f64>,
     y1: Vec<f64>,
     y2: Vec<f64>,
     obs: Vec<Gathered>,
@@ -117,18 +119,15 @@ pub struct Newmark {
 }
 
 impl Newmark {
-    pub fn new(m: &CsrMatrix, c: &CsrMatrix, k: &CsrMatrix, dt: f64) -> Result<Self> {
-        Self::with_ordering(m, c, k, dt, None)
-    }
-
-    /// As `new`, with an explicit elimination order for A (AMD when `None`).
-    pub fn with_ordering(m: &CsrMatrix, c: &CsrMatrix, k: &CsrMatrix, dt: f64, order: Option<&[usize]>) -> Result<Self> {
+    /// `ports` lists the unknowns contact forces act on (they are eliminated late so that
+    /// port vectors forward-substitute cheaply).
+    pub fn new(m: &CsrMatrix, c: &CsrMatrix, k: &CsrMatrix, dt: f64, ports: &[usize]) -> Result<Self> {
         let n = m.n;
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
-        let factor = Ldlt::with_ordering(&a, order)?;
-        let p1 = permute(&CsrMatrix::combine(&[(4.0, m), (-dt * dt, k)]), &factor.perm, &factor.inv);
-        let kp = permute(k, &factor.perm, &factor.inv);
-        let pair = PairOperator::new(&p1, &kp);
+        let factor = Ldlt::for_stepping(&a, ports)?;
+        // The pair product runs in the original numbering, where the heavy rows of modal
+        // bases are contiguous.
+        let pair = PairOperator::new(&CsrMatrix::combine(&[(4.0, m), (-dt * dt, k)]), k);
         Ok(Self {
             n,
             dt,
@@ -138,6 +137,7 @@ impl Newmark {
             q: vec![0.0; n],
             s: vec![0.0; n],
             z: vec![0.0; n],
+            xo: vec![0.0; n],
             y1: vec![0.0; n],
             y2: vec![0.0; n],
             obs: Vec::new(),
@@ -272,11 +272,15 @@ impl Newmark {
     pub fn end_step(&mut self) {
         self.factor.diag_backward(&mut self.z);
         let dt = self.dt;
-        self.pair.mul(&self.z, &mut self.y1, &mut self.y2);
-        for k in 0..self.n {
+        let perm = &self.factor.perm;
+        for (k, &i) in perm.iter().enumerate() {
+            self.xo[i] = self.z[k];
+        }
+        self.pair.mul(&self.xo, &mut self.y1, &mut self.y2);
+        for (k, &i) in perm.iter().enumerate() {
             self.u[k] += dt * self.z[k];
-            self.q[k] = self.y1[k] - self.q[k] - 2.0 * dt * self.s[k];
-            self.s[k] += dt * self.y2[k];
+            self.q[k] = self.y1[i] - self.q[k] - 2.0 * dt * self.s[k];
+            self.s[k] += dt * self.y2[i];
         }
         for (o, (ov, oa)) in self.obs.iter().zip(self.obs_v.iter_mut().zip(self.obs_a.iter_mut())) {
             let nv = o.dot(&self.z);
@@ -284,27 +288,6 @@ impl Newmark {
             *ov = 2.0 * nv - *ov;
         }
     }
-}
-
-/// P·A·Pᵀ in CSR form for the elimination order `perm` (inverse `inv`).
-fn permute(a: &CsrMatrix, perm: &[usize], inv: &[usize]) -> CsrMatrix {
-    let n = a.n;
-    let mut out = CsrMatrix::zeros(n);
-    let mut row: Vec<(usize, f64)> = Vec::new();
-    for k in 0..n {
-        let i = perm[k];
-        row.clear();
-        for p in a.row_ptr[i]..a.row_ptr[i + 1] {
-            row.push((inv[a.col_idx[p]], a.values[p]));
-        }
-        row.sort_unstable_by_key(|e| e.0);
-        for (c, v) in &row {
-            out.col_idx.push(*c);
-            out.values.push(*v);
-        }
-        out.row_ptr[k + 1] = out.col_idx.len();
-    }
-    out
 }
 
 #[cfg(test)]
@@ -328,7 +311,7 @@ mod tests {
         for (ratio, elong) in [(0.01, 1.00033), (0.05, 1.00817), (0.1, 1.03207), (0.2, 1.12003)] {
             let dt = ratio;
             let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
-            let mut nm = Newmark::new(&m, &c, &k, dt).unwrap();
+            let mut nm = Newmark::new(&m, &c, &k, dt, &[]).unwrap();
             nm.observe(&Shape { start: 0, values: vec![1.0] });
             nm.set_state(&[1.0], &[0.0], &[-w * w], &k, &m);
             let wbar = 2.0 / dt * (w * dt / 2.0).atan();

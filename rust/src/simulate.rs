@@ -79,7 +79,7 @@ impl CarRun {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::new(&m, &c, &k, dt)?;
+        let mut nm = Newmark::new(&m, &c, &k, dt, &[])?;
         for i in 0..N_DOF {
             nm.observe(&Shape { start: i, values: vec![1.0] });
         }
@@ -118,7 +118,8 @@ impl<'m> Simulation<'m> {
         let cfg = &model.cfg;
         let st = &model.structure;
         let dt = cfg.solver.dt;
-        let mut track = Newmark::new(&st.m, &st.c, &st.k, dt)?;
+        let contact_dofs: Vec<usize> = if model.cars.is_empty() { vec![] } else { (0..st.layers[0].n_dofs()).map(|k| st.layers[0].offset + k).collect() };
+        let mut track = Newmark::new(&st.m, &st.c, &st.k, dt, &contact_dofs)?;
         let pmap = st.layers.iter().map(|l| (0..l.n_dofs()).map(|k| track.inv()[l.offset + k]).collect()).collect();
         for li in 0..st.layers.len() {
             for x in cfg.observation_points() {

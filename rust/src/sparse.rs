@@ -206,56 +206,143 @@ impl CsrMatrix {
     }
 }
 
-/// Two matrices on one sparsity pattern, applied to the same vector in one pass.
+/// Two symmetric matrices A, B on one sparsity pattern, applied to the same vector in one
+/// pass. The few heavy rows (the boundary functions of a modal basis couple to every sine)
+/// are kept as dense segments over their column span: by symmetry the same segment serves
+/// as a contiguous dot product for the heavy row and as a contiguous axpy for the heavy
+/// column. The remaining light–light entries form a small CSR.
 #[derive(Clone, Debug)]
 pub struct PairOperator {
     n: usize,
-    row_ptr: Vec<usize>,
+    row_ptr: Vec<u32>,
     col_idx: Vec<u32>,
-    /// (a_ij, b_ij) interleaved.
+    /// (a_ij, b_ij) of light–light entries.
     values: Vec<[f64; 2]>,
+    heavy: Vec<HeavyLine>,
+}
+
+#[derive(Clone, Debug)]
+struct HeavyLine {
+    index: usize,
+    /// Column span start; `a`, `b` hold the entries of row `index` at columns span..span+len.
+    span: usize,
+    a: Vec<f64>,
+    b: Vec<f64>,
 }
 
 impl PairOperator {
     pub fn new(a: &CsrMatrix, b: &CsrMatrix) -> Self {
         let pattern = CsrMatrix::combine(&[(1.0, a), (1.0, b)]);
         let n = a.n;
-        let mut values = Vec::with_capacity(pattern.nnz());
-        let mut col_idx = Vec::with_capacity(pattern.nnz());
-        let mut row_ptr = vec![0; n + 1];
+        let deg: Vec<usize> = (0..n).map(|i| pattern.row_ptr[i + 1] - pattern.row_ptr[i]).collect();
+        let mean = deg.iter().sum::<usize>() as f64 / n.max(1) as f64;
+        let is_heavy: Vec<bool> = deg.iter().map(|&d| d as f64 > (4.0 * mean).max(48.0)).collect();
+        let mut heavy = Vec::new();
+        let (mut row_ptr, mut col_idx, mut values) = (vec![0u32; n + 1], Vec::new(), Vec::new());
         for i in 0..n {
-            for p in pattern.row_ptr[i]..pattern.row_ptr[i + 1] {
-                let j = pattern.col_idx[p];
-                let (va, vb) = (a.get(i, j), b.get(i, j));
-                if va != 0.0 || vb != 0.0 {
-                    col_idx.push(j as u32);
-                    values.push([va, vb]);
+            let r = pattern.row_ptr[i]..pattern.row_ptr[i + 1];
+            if is_heavy[i] {
+                let cols = &pattern.col_idx[r];
+                let (lo, hi) = (cols[0], *cols.last().unwrap());
+                heavy.push(HeavyLine {
+                    index: i,
+                    span: lo,
+                    a: (lo..=hi).map(|j| a.get(i, j)).collect(),
+                    b: (lo..=hi).map(|j| b.get(i, j)).collect(),
+                });
+            } else {
+                let from = col_idx.len();
+                for p in r {
+                    let j = pattern.col_idx[p];
+                    if !is_heavy[j] {
+                        col_idx.push(j as u32);
+                        values.push([a.get(i, j), b.get(i, j)]);
+                    }
+                }
+                if let Some(&last) = col_idx[from..].last() {
+                    while (col_idx.len() - from) % 4 != 0 {
+                        col_idx.push(last);
+                        values.push([0.0, 0.0]);
+                    }
                 }
             }
-            row_ptr[i + 1] = col_idx.len();
+            row_ptr[i + 1] = col_idx.len() as u32;
         }
-        Self { n, row_ptr, col_idx, values }
+        Self { n, row_ptr, col_idx, values, heavy }
     }
 
     pub fn nnz(&self) -> usize {
-        self.values.len()
+        self.values.len() + self.heavy.iter().map(|h| 2 * h.a.len()).sum::<usize>()
     }
 
-    /// ya = A·x, yb = B·x.
-    #[inline]
+    /// ya = A·x, yb = B·x (all of length n).
     pub fn mul(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
+        assert!(x.len() == self.n && ya.len() == self.n && yb.len() == self.n);
         for i in 0..self.n {
-            let (mut sa, mut sb) = (0.0, 0.0);
-            let r = self.row_ptr[i]..self.row_ptr[i + 1];
-            for (c, v) in self.col_idx[r.clone()].iter().zip(&self.values[r]) {
-                let xj = x[*c as usize];
-                sa += v[0] * xj;
-                sb += v[1] * xj;
+            let (r0, r1) = (self.row_ptr[i] as usize, self.row_ptr[i + 1] as usize);
+            let (mut sa, mut sb) = ([0.0; 4], [0.0; 4]);
+            let mut p = r0;
+            while p < r1 {
+                // SAFETY: rows hold whole chunks of 4 entries and column indices are < n.
+                unsafe {
+                    for q in 0..4 {
+                        let xj = *x.get_unchecked(*self.col_idx.get_unchecked(p + q) as usize);
+                        let v = self.values.get_unchecked(p + q);
+                        sa[q] += v[0] * xj;
+                        sb[q] += v[1] * xj;
+                    }
+                }
+                p += 4;
             }
-            ya[i] = sa;
-            yb[i] = sb;
+            ya[i] = (sa[0] + sa[1]) + (sa[2] + sa[3]);
+            yb[i] = (sb[0] + sb[1]) + (sb[2] + sb[3]);
+        }
+        // Heavy columns (axpy), then heavy rows (dot) overwrite their own outputs.
+        for h in &self.heavy {
+            let xi = x[h.index];
+            let len = h.a.len();
+            for (y, v) in ya[h.span..h.span + len].iter_mut().zip(&h.a) {
+                *y += v * xi;
+            }
+            for (y, w) in yb[h.span..h.span + len].iter_mut().zip(&h.b) {
+                *y += w * xi;
+            }
+        }
+        for h in &self.heavy {
+            let xs = &x[h.span..h.span + h.a.len()];
+            ya[h.index] = dot4(&h.a, xs);
+            yb[h.index] = dot4(&h.b, xs);
         }
     }
+}
+
+/// Pads the line that starts at `from` to a multiple of four entries by repeating its last
+/// index with a zero value: the extra terms add or subtract exactly zero, and the kernels
+/// can run whole chunks of four without a variable-length tail.
+fn pad4(idx: &mut Vec<u32>, val: &mut Vec<f64>, from: usize) {
+    if let Some(&last) = idx[from..].last() {
+        while (idx.len() - from) % 4 != 0 {
+            idx.push(last);
+            val.push(0.0);
+        }
+    }
+}
+
+/// Σ a_i·b_i with four independent partial sums.
+#[inline(always)]
+fn dot4(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0; 4];
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ar, br) = (ac.remainder(), bc.remainder());
+    for (x, y) in ac.zip(bc) {
+        for q in 0..4 {
+            s[q] += x[q] * y[q];
+        }
+    }
+    for (x, y) in ar.iter().zip(br) {
+        s[0] += x * y;
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
 }
 
 /// P·A·Pᵀ = L·D·Lᵀ of a symmetric positive definite matrix. Solves work in the permuted
@@ -266,8 +353,9 @@ pub struct Ldlt {
     /// `perm[k]`: original index of the k-th eliminated unknown; `inv` its inverse.
     pub perm: Vec<usize>,
     pub inv: Vec<usize>,
-    /// Strictly lower part of unit L, by column.
-    col_ptr: Vec<usize>,
+    /// Strictly lower part of unit L, by column (row indices < n, checked at construction),
+    /// each column padded to a multiple of 4 entries with zeros (see `pad4`).
+    col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     l: Vec<f64>,
     d_inv: Vec<f64>,
@@ -277,6 +365,72 @@ impl Ldlt {
     /// Factorises with an approximate-minimum-degree ordering.
     pub fn new(a: &CsrMatrix) -> Result<Self> {
         Self::with_ordering(a, None)
+    }
+
+    /// Factorises with the cheapest of a few orderings for time stepping: AMD, and AMD with
+    /// the high-degree unknowns and then also `late` (the unknowns that contact forces act on)
+    /// moved to the end. The cost estimate counts a forward and a backward substitution of
+    /// one vector plus the forward substitution of vectors that start at the first `late`
+    /// unknown. The trailing dense block is then sorted by original index, which leaves
+    /// its fill unchanged and turns the entries there into long runs.
+    pub fn for_stepping(a: &CsrMatrix, late: &[usize]) -> Result<Self> {
+        let n = a.n;
+        let amd = Self::new(a)?;
+        let degree: Vec<usize> = (0..n).map(|i| a.row_ptr[i + 1] - a.row_ptr[i]).collect();
+        let mean = degree.iter().sum::<usize>() as f64 / n.max(1) as f64;
+        let heavy: Vec<bool> = degree.iter().map(|&d| d as f64 > (4.0 * mean).max(32.0)).collect();
+        let mut is_late = vec![false; n];
+        for &i in late {
+            is_late[i] = true;
+        }
+        let moved = |keep_last: &dyn Fn(usize) -> bool| -> Vec<usize> {
+            let mut o: Vec<usize> = amd.perm.iter().copied().filter(|&i| !keep_last(i)).collect();
+            o.extend(amd.perm.iter().copied().filter(|&i| keep_last(i)));
+            o
+        };
+        let mut best = amd.clone();
+        let mut best_cost = best.stepping_cost(late);
+        for cand in [moved(&|i| heavy[i]), moved(&|i| heavy[i] || is_late[i])] {
+            if let Ok(f) = Self::with_ordering(a, Some(&cand)) {
+                let c = f.stepping_cost(late);
+                if c < best_cost {
+                    best = f;
+                    best_cost = c;
+                }
+            }
+        }
+        // Sort the dense trailing block.
+        let p = best.dense_suffix(0.9);
+        if p + 1 < n {
+            let mut o = best.perm.clone();
+            o[p..].sort_unstable();
+            if let Ok(f) = Self::with_ordering(a, Some(&o)) {
+                if f.stepping_cost(late) <= best_cost {
+                    best = f;
+                }
+            }
+        }
+        Ok(best)
+    }
+
+    fn stepping_cost(&self, late: &[usize]) -> usize {
+        let start = late.iter().map(|&i| self.inv[i]).min().unwrap_or(self.n);
+        2 * self.nnz_l() + 2 * self.nnz_l_from(start)
+    }
+
+    /// First column p such that every column k ≥ p of L holds at least `frac` of the
+    /// n − 1 − k entries it could hold.
+    fn dense_suffix(&self, frac: f64) -> usize {
+        let mut p = self.n;
+        while p > 0 {
+            let k = p - 1;
+            let cnt = (self.col_ptr[k + 1] - self.col_ptr[k]) as usize;
+            if (cnt as f64) < frac * (self.n - 1 - k) as f64 {
+                break;
+            }
+            p = k;
+        }
+        p
     }
 
     /// Factorises with a given elimination order (`order[k]` = original index eliminated
@@ -337,12 +491,12 @@ impl Ldlt {
             return Err(VtbError::Solver("expected a simplicial factorisation".into()));
         };
         let (lp, li) = (s.col_ptr(), s.row_idx());
-        let mut out_ptr = vec![0usize; n + 1];
+        let mut out_ptr = vec![0u32; n + 1];
         let mut out_row = Vec::with_capacity(li.len());
         let mut out_l = Vec::with_capacity(li.len());
         let mut d_inv = vec![0.0; n];
-        // Diagonal pivots are compared with the permuted diagonal of A to detect a
-        // numerically singular (unsupported) system.
+        // Pivots are compared with the permuted diagonal of A to detect a numerically
+        // singular (unsupported) system.
         let diag = a.diagonal();
         for j in 0..n {
             for p in lp[j]..lp[j + 1] {
@@ -359,11 +513,13 @@ impl Ldlt {
                     }
                     d_inv[j] = 1.0 / dj;
                 } else {
+                    assert!(i > j && i < n, "L entries lie strictly below the diagonal");
                     out_row.push(i as u32);
                     out_l.push(l_val[p]);
                 }
             }
-            out_ptr[j + 1] = out_row.len();
+            pad4(&mut out_row, &mut out_l, out_ptr[j] as usize);
+            out_ptr[j + 1] = out_row.len() as u32;
         }
         Ok(Self { n, perm, inv, col_ptr: out_ptr, row_idx: out_row, l: out_l, d_inv })
     }
@@ -373,39 +529,60 @@ impl Ldlt {
         self.l.len()
     }
 
+    /// Stored entries of L (with padding) in columns `start..n` (the work of a forward substitution
+    /// of a vector whose first nonzero is at `start`).
+    pub fn nnz_l_from(&self, start: usize) -> usize {
+        self.nnz_l() - self.col_ptr[start.min(self.n)] as usize
+    }
+
     /// z ← L⁻¹·z for `W` interleaved right-hand sides, skipping columns before `start`
-    /// (the caller knows z is zero there).
+    /// (the caller knows z is zero there). `z.len()` must be `W·n`.
     #[inline]
     pub fn forward<const W: usize>(&self, z: &mut [f64], start: usize) {
+        assert_eq!(z.len(), W * self.n);
         for k in start..self.n {
+            let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
             let mut zk = [0.0; W];
             zk.copy_from_slice(&z[k * W..k * W + W]);
-            if zk.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            let r = self.col_ptr[k]..self.col_ptr[k + 1];
-            for (&i, &l) in self.row_idx[r.clone()].iter().zip(&self.l[r]) {
-                let zi = &mut z[i as usize * W..i as usize * W + W];
-                for c in 0..W {
-                    zi[c] -= l * zk[c];
+            let mut p = a;
+            while p < b {
+                // SAFETY: columns hold whole chunks of 4 entries below nnz, and every row index
+                // is < n (asserted at construction), so i·W + c < W·n = z.len().
+                unsafe {
+                    for q in 0..4 {
+                        let i = *self.row_idx.get_unchecked(p + q) as usize;
+                        let l = *self.l.get_unchecked(p + q);
+                        for c in 0..W {
+                            *z.get_unchecked_mut(i * W + c) -= l * zk[c];
+                        }
+                    }
                 }
+                p += 4;
             }
         }
     }
 
-    /// z ← D⁻¹·z then z ← L⁻ᵀ·z for one right-hand side.
+    /// z ← D⁻¹·z then z ← L⁻ᵀ·z for one right-hand side (`z.len()` = n).
     #[inline]
     pub fn diag_backward(&self, z: &mut [f64]) {
+        assert_eq!(z.len(), self.n);
         for (v, d) in z.iter_mut().zip(&self.d_inv) {
             *v *= d;
         }
         for k in (0..self.n).rev() {
-            let r = self.col_ptr[k]..self.col_ptr[k + 1];
-            let mut s = 0.0;
-            for (&i, &l) in self.row_idx[r.clone()].iter().zip(&self.l[r]) {
-                s += l * z[i as usize];
+            let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
+            let mut s = [0.0; 4];
+            let mut p = a;
+            while p < b {
+                // SAFETY: as in `forward`.
+                unsafe {
+                    for q in 0..4 {
+                        s[q] += *self.l.get_unchecked(p + q) * *z.get_unchecked(*self.row_idx.get_unchecked(p + q) as usize);
+                    }
+                }
+                p += 4;
             }
-            z[k] -= s;
+            z[k] -= (s[0] + s[1]) + (s[2] + s[3]);
         }
     }
 
