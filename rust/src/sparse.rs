@@ -316,18 +316,6 @@ impl PairOperator {
     }
 }
 
-/// Pads the line that starts at `from` to a multiple of four entries by repeating its last
-/// index with a zero value: the extra terms add or subtract exactly zero, and the kernels
-/// can run whole chunks of four without a variable-length tail.
-fn pad4(idx: &mut Vec<u32>, val: &mut Vec<f64>, from: usize) {
-    if let Some(&last) = idx[from..].last() {
-        while (idx.len() - from) % 4 != 0 {
-            idx.push(last);
-            val.push(0.0);
-        }
-    }
-}
-
 /// Σ a_i·b_i with four independent partial sums.
 #[inline(always)]
 fn dot4(a: &[f64], b: &[f64]) -> f64 {
@@ -353,8 +341,7 @@ pub struct Ldlt {
     /// `perm[k]`: original index of the k-th eliminated unknown; `inv` its inverse.
     pub perm: Vec<usize>,
     pub inv: Vec<usize>,
-    /// Strictly lower part of unit L, by column (row indices < n, checked at construction),
-    /// each column padded to a multiple of 4 entries with zeros (see `pad4`).
+    /// Strictly lower part of unit L, by column (row indices < n, checked at construction).
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     l: Vec<f64>,
@@ -518,7 +505,6 @@ impl Ldlt {
                     out_l.push(l_val[p]);
                 }
             }
-            pad4(&mut out_row, &mut out_l, out_ptr[j] as usize);
             out_ptr[j + 1] = out_row.len() as u32;
         }
         Ok(Self { n, perm, inv, col_ptr: out_ptr, row_idx: out_row, l: out_l, d_inv })
@@ -529,7 +515,7 @@ impl Ldlt {
         self.l.len()
     }
 
-    /// Stored entries of L (with padding) in columns `start..n` (the work of a forward substitution
+    /// Entries of L in columns `start..n` (the work of a forward substitution
     /// of a vector whose first nonzero is at `start`).
     pub fn nnz_l_from(&self, start: usize) -> usize {
         self.nnz_l() - self.col_ptr[start.min(self.n)] as usize
@@ -544,20 +530,16 @@ impl Ldlt {
             let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
             let mut zk = [0.0; W];
             zk.copy_from_slice(&z[k * W..k * W + W]);
-            let mut p = a;
-            while p < b {
-                // SAFETY: columns hold whole chunks of 4 entries below nnz, and every row index
-                // is < n (asserted at construction), so i·W + c < W·n = z.len().
+            for p in a..b {
+                // SAFETY: p < nnz (col_ptr is monotone and ends at nnz) and every row index is
+                // < n (asserted at construction), so i·W + c < W·n = z.len().
                 unsafe {
-                    for q in 0..4 {
-                        let i = *self.row_idx.get_unchecked(p + q) as usize;
-                        let l = *self.l.get_unchecked(p + q);
-                        for c in 0..W {
-                            *z.get_unchecked_mut(i * W + c) -= l * zk[c];
-                        }
+                    let i = *self.row_idx.get_unchecked(p) as usize;
+                    let l = *self.l.get_unchecked(p);
+                    for c in 0..W {
+                        *z.get_unchecked_mut(i * W + c) -= l * zk[c];
                     }
                 }
-                p += 4;
             }
         }
     }
@@ -571,18 +553,20 @@ impl Ldlt {
         }
         for k in (0..self.n).rev() {
             let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
-            let mut s = [0.0; 4];
+            let mut s = [0.0; 2];
             let mut p = a;
-            while p < b {
-                // SAFETY: as in `forward`.
-                unsafe {
-                    for q in 0..4 {
-                        s[q] += *self.l.get_unchecked(p + q) * *z.get_unchecked(*self.row_idx.get_unchecked(p + q) as usize);
-                    }
+            // SAFETY: as in `forward`.
+            unsafe {
+                while p + 1 < b {
+                    s[0] += *self.l.get_unchecked(p) * *z.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                    s[1] += *self.l.get_unchecked(p + 1) * *z.get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
+                    p += 2;
                 }
-                p += 4;
+                if p < b {
+                    s[0] += *self.l.get_unchecked(p) * *z.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                }
             }
-            z[k] -= (s[0] + s[1]) + (s[2] + s[3]);
+            z[k] -= s[0] + s[1];
         }
     }
 
