@@ -8,7 +8,19 @@ fn main() {
     let t2 = Instant::now();
     let res = sim.run(None).unwrap();
     let t3 = Instant::now();
-    println!("assemble {:?} setup {:?} run {:?}", t1 - t0, t2 - t1, t3 - t2);
-    println!("nnz M {} K {} C {}", model.structure.m.nnz(), model.structure.k.nnz(), model.structure.c.nnz());
-    for (k, v) in res.metrics() { println!("{k:24} {v:.6e}"); }
+    println!(
+        "assemble {:?} setup {:?} run {:?}",
+        t1 - t0,
+        t2 - t1,
+        t3 - t2
+    );
+    println!(
+        "nnz M {} K {} C {}",
+        model.structure.m.nnz(),
+        model.structure.k.nnz(),
+        model.structure.c.nnz()
+    );
+    for (k, v) in res.metrics() {
+        println!("{k:24} {v:.6e}");
+    }
 }

@@ -17,7 +17,12 @@ pub enum Func {
     /// c0 + c1·ξ + c2·ξ² + c3·ξ³ with ξ = x − origin.
     Poly { origin: f64, c: [f64; 4] },
     /// amp·sin(k·(x − origin) + phase).
-    Sine { origin: f64, amp: f64, k: f64, phase: f64 },
+    Sine {
+        origin: f64,
+        amp: f64,
+        k: f64,
+        phase: f64,
+    },
 }
 
 impl Func {
@@ -28,23 +33,54 @@ impl Func {
                 let s = x - origin;
                 c[0] + s * (c[1] + s * (c[2] + s * c[3]))
             }
-            Func::Sine { origin, amp, k, phase } => amp * (k * (x - origin) + phase).sin(),
+            Func::Sine {
+                origin,
+                amp,
+                k,
+                phase,
+            } => amp * (k * (x - origin) + phase).sin(),
         }
     }
 
     /// First derivative.
     pub fn d1(&self) -> Func {
         match *self {
-            Func::Poly { origin, c } => Func::Poly { origin, c: [c[1], 2.0 * c[2], 3.0 * c[3], 0.0] },
-            Func::Sine { origin, amp, k, phase } => Func::Sine { origin, amp: amp * k, k, phase: phase + 0.5 * PI },
+            Func::Poly { origin, c } => Func::Poly {
+                origin,
+                c: [c[1], 2.0 * c[2], 3.0 * c[3], 0.0],
+            },
+            Func::Sine {
+                origin,
+                amp,
+                k,
+                phase,
+            } => Func::Sine {
+                origin,
+                amp: amp * k,
+                k,
+                phase: phase + 0.5 * PI,
+            },
         }
     }
 
     /// Second derivative (exact, without a π phase shift for the sine).
     pub fn d2(&self) -> Func {
         match *self {
-            Func::Poly { origin, c } => Func::Poly { origin, c: [2.0 * c[2], 6.0 * c[3], 0.0, 0.0] },
-            Func::Sine { origin, amp, k, phase } => Func::Sine { origin, amp: -amp * k * k, k, phase },
+            Func::Poly { origin, c } => Func::Poly {
+                origin,
+                c: [2.0 * c[2], 6.0 * c[3], 0.0, 0.0],
+            },
+            Func::Sine {
+                origin,
+                amp,
+                k,
+                phase,
+            } => Func::Sine {
+                origin,
+                amp: -amp * k * k,
+                k,
+                phase,
+            },
         }
     }
 
@@ -92,13 +128,21 @@ fn gauss_legendre<const N: usize>() -> ([f64; N], [f64; N]) {
 fn gauss_integrate(f: &Func, g: &Func, a: f64, b: f64) -> f64 {
     let (xs, ws) = gauss16();
     let (m, h) = (0.5 * (a + b), 0.5 * (b - a));
-    xs.iter().zip(ws).map(|(&t, &w)| w * f.eval(m + h * t) * g.eval(m + h * t)).sum::<f64>() * h
+    xs.iter()
+        .zip(ws)
+        .map(|(&t, &w)| w * f.eval(m + h * t) * g.eval(m + h * t))
+        .sum::<f64>()
+        * h
 }
 
 /// sin(z)/z, accurate near 0.
 #[inline]
 fn sinc(z: f64) -> f64 {
-    if z.abs() < 1e-4 { 1.0 - z * z / 6.0 } else { z.sin() / z }
+    if z.abs() < 1e-4 {
+        1.0 - z * z / 6.0
+    } else {
+        z.sin() / z
+    }
 }
 
 /// ∫_a^b cos(κx + ψ) dx, stable for κ → 0.
@@ -117,8 +161,18 @@ pub fn integrate(f: &Func, g: &Func, a: f64, b: f64) -> f64 {
         (Func::Poly { .. }, Func::Sine { .. }) => poly_sine(f, g, a, b),
         (Func::Sine { .. }, Func::Poly { .. }) => poly_sine(g, f, a, b),
         (
-            Func::Sine { origin: o1, amp: a1, k: k1, phase: p1 },
-            Func::Sine { origin: o2, amp: a2, k: k2, phase: p2 },
+            Func::Sine {
+                origin: o1,
+                amp: a1,
+                k: k1,
+                phase: p1,
+            },
+            Func::Sine {
+                origin: o2,
+                amp: a2,
+                k: k2,
+                phase: p2,
+            },
         ) => {
             // sin θ1 sin θ2 = ½[cos(θ1 − θ2) − cos(θ1 + θ2)], θ = kx + (phase − k·origin).
             let (c1, c2) = (p1 - k1 * o1, p2 - k2 * o2);
@@ -129,7 +183,15 @@ pub fn integrate(f: &Func, g: &Func, a: f64, b: f64) -> f64 {
 
 /// ∫ p(x)·A sin(kx + φ) by parts (p cubic): [−p cos/k + p′ sin/k² + p″ cos/k³ − p‴ sin/k⁴].
 fn poly_sine(p: &Func, s: &Func, a: f64, b: f64) -> f64 {
-    let Func::Sine { origin, amp, k, phase } = *s else { unreachable!() };
+    let Func::Sine {
+        origin,
+        amp,
+        k,
+        phase,
+    } = *s
+    else {
+        unreachable!()
+    };
     if (k * (b - a)).abs() < 1.0 {
         return gauss_integrate(p, s, a, b);
     }
@@ -157,10 +219,22 @@ pub struct Piece {
 pub fn hermite(origin: f64, l: f64) -> [Func; 4] {
     let (l2, l3) = (l * l, l * l * l);
     [
-        Func::Poly { origin, c: [1.0, 0.0, -3.0 / l2, 2.0 / l3] },
-        Func::Poly { origin, c: [0.0, 1.0, -2.0 / l, 1.0 / l2] },
-        Func::Poly { origin, c: [0.0, 0.0, 3.0 / l2, -2.0 / l3] },
-        Func::Poly { origin, c: [0.0, 0.0, -1.0 / l, 1.0 / l2] },
+        Func::Poly {
+            origin,
+            c: [1.0, 0.0, -3.0 / l2, 2.0 / l3],
+        },
+        Func::Poly {
+            origin,
+            c: [0.0, 1.0, -2.0 / l, 1.0 / l2],
+        },
+        Func::Poly {
+            origin,
+            c: [0.0, 0.0, 3.0 / l2, -2.0 / l3],
+        },
+        Func::Poly {
+            origin,
+            c: [0.0, 0.0, -1.0 / l, 1.0 / l2],
+        },
     ]
 }
 
@@ -168,7 +242,12 @@ pub fn hermite(origin: f64, l: f64) -> [Func; 4] {
 fn hermite_values(xi: f64, l: f64) -> [f64; 4] {
     let s = xi / l;
     let (s2, s3) = (s * s, s * s * s);
-    [1.0 - 3.0 * s2 + 2.0 * s3, l * (s - 2.0 * s2 + s3), 3.0 * s2 - 2.0 * s3, l * (s3 - s2)]
+    [
+        1.0 - 3.0 * s2 + 2.0 * s3,
+        l * (s - 2.0 * s2 + s3),
+        3.0 * s2 - 2.0 * s3,
+        l * (s3 - s2),
+    ]
 }
 
 /// A shape vector: `values` of the contiguous layer DOFs `start..start + values.len()`.
@@ -243,8 +322,17 @@ impl ModalBasis {
                 .collect::<Vec<f64>>()
         });
         let c6 = (l / PI).powi(6);
-        let mu = ab.map(|(a, b)| (rho_a * 2.0 / l * c6 * tail_sum(a * a + b * b, 2.0 * a * b, 6, n_sines)).sqrt());
-        Self { length, n_sines, rho_a, scale: (2.0 / (rho_a * length)).sqrt(), proj, mu }
+        let mu = ab.map(|(a, b)| {
+            (rho_a * 2.0 / l * c6 * tail_sum(a * a + b * b, 2.0 * a * b, 6, n_sines)).sqrt()
+        });
+        Self {
+            length,
+            n_sines,
+            rho_a,
+            scale: (2.0 / (rho_a * length)).sqrt(),
+            proj,
+            mu,
+        }
     }
 
     pub fn n_dofs(&self) -> usize {
@@ -258,7 +346,12 @@ impl ModalBasis {
 
     /// Sine n (1-based) as a piece function.
     pub fn sine(&self, n: usize) -> Func {
-        Func::Sine { origin: 0.0, amp: self.scale, k: self.wavenumber(n), phase: 0.0 }
+        Func::Sine {
+            origin: 0.0,
+            amp: self.scale,
+            k: self.wavenumber(n),
+            phase: 0.0,
+        }
     }
 
     /// Values of all basis functions at x into `out` (length n_dofs); the sines by the
@@ -349,8 +442,15 @@ impl ModalBasis {
             let nmax = a.n_sines.max(b.n_sines);
             for i in 0..2 {
                 for j in 0..2 {
-                    let (p, q) = (ab[i].0 * ab[j].0 + ab[i].1 * ab[j].1, ab[i].0 * ab[j].1 + ab[i].1 * ab[j].0);
-                    set(2 + i, 2 + j, 2.0 / l * c6 * tail_sum(p, q, 6, nmax) / (a.mu[i] * b.mu[j]));
+                    let (p, q) = (
+                        ab[i].0 * ab[j].0 + ab[i].1 * ab[j].1,
+                        ab[i].0 * ab[j].1 + ab[i].1 * ab[j].0,
+                    );
+                    set(
+                        2 + i,
+                        2 + j,
+                        2.0 / l * c6 * tail_sum(p, q, 6, nmax) / (a.mu[i] * b.mu[j]),
+                    );
                 }
             }
             for n in 1..=a.n_sines.min(b.n_sines) {
@@ -372,8 +472,15 @@ impl ModalBasis {
             let nmax = a.n_sines.max(b.n_sines);
             for i in 0..2 {
                 for j in 0..2 {
-                    let (p, q) = (ab[i].0 * ab[j].0 + ab[i].1 * ab[j].1, ab[i].0 * ab[j].1 + ab[i].1 * ab[j].0);
-                    set(2 + i, 2 + j, 2.0 / l * c2 * tail_sum(p, q, 2, nmax) / (a.mu[i] * b.mu[j]));
+                    let (p, q) = (
+                        ab[i].0 * ab[j].0 + ab[i].1 * ab[j].1,
+                        ab[i].0 * ab[j].1 + ab[i].1 * ab[j].0,
+                    );
+                    set(
+                        2 + i,
+                        2 + j,
+                        2.0 / l * c2 * tail_sum(p, q, 2, nmax) / (a.mu[i] * b.mu[j]),
+                    );
                 }
             }
             for n in 1..=a.n_sines.min(b.n_sines) {
@@ -414,8 +521,16 @@ impl FemBasis {
                 let a = e as f64 * le;
                 Piece {
                     a,
-                    b: if e + 1 == self.n_elements { self.length } else { a + le },
-                    funcs: hermite(a, le).into_iter().enumerate().map(|(j, f)| (2 * e + j, f)).collect(),
+                    b: if e + 1 == self.n_elements {
+                        self.length
+                    } else {
+                        a + le
+                    },
+                    funcs: hermite(a, le)
+                        .into_iter()
+                        .enumerate()
+                        .map(|(j, f)| (2 * e + j, f))
+                        .collect(),
                 }
             })
             .collect()
@@ -466,13 +581,17 @@ impl LayerBasis {
                 let e = b.element_of(x);
                 let le = b.element_length();
                 out.start = 2 * e;
-                out.values.copy_from_slice(&hermite_values(x - e as f64 * le, le));
+                out.values
+                    .copy_from_slice(&hermite_values(x - e as f64 * le, le));
             }
         }
     }
 
     pub fn shape(&self, x: f64) -> Shape {
-        let mut s = Shape { start: 0, values: vec![0.0; self.shape_len()] };
+        let mut s = Shape {
+            start: 0,
+            values: vec![0.0; self.shape_len()],
+        };
         self.eval(x, &mut s);
         s
     }
@@ -488,8 +607,14 @@ mod tests {
 
     #[test]
     fn gauss_legendre_is_exact_for_polynomials() {
-        let f = Func::Poly { origin: 0.0, c: [1.0, 2.0, 3.0, 4.0] };
-        let g = Func::Poly { origin: 1.0, c: [0.5, -1.0, 0.0, 2.0] };
+        let f = Func::Poly {
+            origin: 0.0,
+            c: [1.0, 2.0, 3.0, 4.0],
+        };
+        let g = Func::Poly {
+            origin: 1.0,
+            c: [0.5, -1.0, 0.0, 2.0],
+        };
         // Reference by expanding into monomials and integrating exactly on [0, 2].
         let n = 2000;
         let h = 2.0 / n as f64;
@@ -497,7 +622,13 @@ mod tests {
         let mut s = 0.0;
         for i in 0..=n {
             let x = i as f64 * h;
-            let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+            let w = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
             s += w * f.eval(x) * g.eval(x);
         }
         s *= h / 3.0;
@@ -520,15 +651,29 @@ mod tests {
     #[test]
     fn poly_sine_matches_quadrature() {
         let l = 3.0;
-        let p = Func::Poly { origin: 0.5, c: [0.3, -1.0, 0.7, 0.2] };
+        let p = Func::Poly {
+            origin: 0.5,
+            c: [0.3, -1.0, 0.7, 0.2],
+        };
         for &(k, ph) in &[(0.1, 0.3), (2.0, 0.0), (25.0, 1.1)] {
-            let s = Func::Sine { origin: 0.2, amp: 1.7, k, phase: ph };
+            let s = Func::Sine {
+                origin: 0.2,
+                amp: 1.7,
+                k,
+                phase: ph,
+            };
             let n = 20000;
             let h = l / n as f64;
             let mut q = 0.0;
             for i in 0..=n {
                 let x = i as f64 * h;
-                let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
                 q += w * p.eval(x) * s.eval(x);
             }
             q *= h / 3.0;
@@ -548,16 +693,25 @@ mod tests {
         let pts: Vec<(f64, f64)> = (0..n_int)
             .flat_map(|e| {
                 let (x0, h) = (e as f64 * l / n_int as f64, l / n_int as f64);
-                xs.iter().zip(ws).map(move |(&t, w)| (x0 + 0.5 * h * (t + 1.0), 0.5 * h * w)).collect::<Vec<_>>()
+                xs.iter()
+                    .zip(ws)
+                    .map(move |(&t, w)| (x0 + 0.5 * h * (t + 1.0), 0.5 * h * w))
+                    .collect::<Vec<_>>()
             })
             .collect();
         let d2 = |bs: &ModalBasis, x: f64| {
             let hh = 1e-3;
-            let (mut p, mut m, mut c) = (vec![0.0; bs.n_dofs()], vec![0.0; bs.n_dofs()], vec![0.0; bs.n_dofs()]);
+            let (mut p, mut m, mut c) = (
+                vec![0.0; bs.n_dofs()],
+                vec![0.0; bs.n_dofs()],
+                vec![0.0; bs.n_dofs()],
+            );
             bs.eval_into(x + hh, &mut p);
             bs.eval_into(x - hh, &mut m);
             bs.eval_into(x, &mut c);
-            (0..bs.n_dofs()).map(|i| (p[i] - 2.0 * c[i] + m[i]) / (hh * hh)).collect::<Vec<_>>()
+            (0..bs.n_dofs())
+                .map(|i| (p[i] - 2.0 * c[i] + m[i]) / (hh * hh))
+                .collect::<Vec<_>>()
         };
         for curvature in [false, true] {
             let g = ModalBasis::gram(&a, &b, curvature);
@@ -580,7 +734,10 @@ mod tests {
             let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (i, (x, y)) in g.iter().zip(&q).enumerate() {
                 let tol = if curvature { 2e-5 } else { 1e-9 };
-                assert!((x - y).abs() < tol * scale, "curv={curvature} entry {i}: {x} vs {y}");
+                assert!(
+                    (x - y).abs() < tol * scale,
+                    "curv={curvature} entry {i}: {x} vs {y}"
+                );
             }
         }
         // Unit modal mass of g3, g4 and of the sines.
@@ -593,7 +750,9 @@ mod tests {
         let mut v = vec![0.0; n];
         for &x in &[0.3, 7.0, 20.0, 39.9] {
             a.eval_into(x, &mut v);
-            let proj: f64 = (0..a.n_sines).map(|k| a.proj[0][k] * v[4 + k] / a.scale).sum();
+            let proj: f64 = (0..a.n_sines)
+                .map(|k| a.proj[0][k] * v[4 + k] / a.scale)
+                .sum();
             let h2 = hermite_values(x, l)[1];
             assert!((a.mu[0] * v[2] + proj - h2).abs() < 1e-11 * l);
         }
@@ -616,10 +775,16 @@ mod tests {
     fn tail_sums_match_direct_summation() {
         for s in [2, 4, 6] {
             for n in [1usize, 7, 120, 1000] {
-                let direct: f64 = ((n + 1)..4_000_000).rev().map(|k| (1.0 + 0.5 * if k % 2 == 0 { 1.0 } else { -1.0 }) / (k as f64).powi(s)).sum();
+                let direct: f64 = ((n + 1)..4_000_000)
+                    .rev()
+                    .map(|k| (1.0 + 0.5 * if k % 2 == 0 { 1.0 } else { -1.0 }) / (k as f64).powi(s))
+                    .sum();
                 let rest = if s == 2 { 1.0 / 4.0e6 } else { 0.0 };
                 let t = tail_sum(1.0, 0.5, s, n);
-                assert!((t - direct - rest).abs() < 1e-7 * t, "s={s} n={n}: {t} vs {direct}");
+                assert!(
+                    (t - direct - rest).abs() < 1e-7 * t,
+                    "s={s} n={n}: {t} vs {direct}"
+                );
             }
         }
     }
@@ -628,7 +793,12 @@ mod tests {
     fn hermite_end_conditions() {
         let l = 2.5;
         let h = hermite(1.0, l);
-        let want = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+        let want = [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ];
         for (j, f) in h.iter().enumerate() {
             let d = f.d1();
             let got = [f.eval(1.0), d.eval(1.0), f.eval(1.0 + l), d.eval(1.0 + l)];

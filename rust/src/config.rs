@@ -80,7 +80,10 @@ impl RayleighConfig {
         match *self {
             RayleighConfig::Coefficients { alpha, beta } => (alpha, beta),
             RayleighConfig::Ratio { ratio, f1, f2 } => {
-                let (w1, w2) = (2.0 * std::f64::consts::PI * f1, 2.0 * std::f64::consts::PI * f2);
+                let (w1, w2) = (
+                    2.0 * std::f64::consts::PI * f1,
+                    2.0 * std::f64::consts::PI * f2,
+                );
                 (2.0 * ratio * w1 * w2 / (w1 + w2), 2.0 * ratio / (w1 + w2))
             }
         }
@@ -143,7 +146,11 @@ fn default_fem_elements() -> usize {
 
 impl Default for DiscretisationConfig {
     fn default() -> Self {
-        Self { method: Method::Modal, fem_elements: default_fem_elements(), omega_r: None }
+        Self {
+            method: Method::Modal,
+            fem_elements: default_fem_elements(),
+            omega_r: None,
+        }
     }
 }
 
@@ -197,7 +204,12 @@ impl VehicleConfig {
     /// Wheelset positions at t = 0, front to rear (wheels 1..4).
     pub fn wheel_offsets(&self) -> [f64; 4] {
         let xc = self.x_front - self.l_c - self.l_t;
-        [xc + self.l_c + self.l_t, xc + self.l_c - self.l_t, xc - self.l_c + self.l_t, xc - self.l_c - self.l_t]
+        [
+            xc + self.l_c + self.l_t,
+            xc + self.l_c - self.l_t,
+            xc - self.l_c + self.l_t,
+            xc - self.l_c - self.l_t,
+        ]
     }
 }
 
@@ -322,7 +334,11 @@ pub struct Profile {
 
 impl Profile {
     pub fn flat() -> Self {
-        Self { x0: 0.0, dx: 1.0, values: Vec::new() }
+        Self {
+            x0: 0.0,
+            dx: 1.0,
+            values: Vec::new(),
+        }
     }
 
     /// r(x); an empty profile is a perfectly smooth rail.
@@ -348,17 +364,29 @@ impl Profile {
 // ---------------------------------------------------------------------------------------------
 
 fn finite(field: &str, v: f64) -> Result<f64> {
-    if v.is_finite() { Ok(v) } else { Err(VtbError::config(field, v, "must be a finite number")) }
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(VtbError::config(field, v, "must be a finite number"))
+    }
 }
 
 fn positive(field: &str, v: f64) -> Result<f64> {
     finite(field, v)?;
-    if v > 0.0 { Ok(v) } else { Err(VtbError::config(field, v, "must be > 0")) }
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(VtbError::config(field, v, "must be > 0"))
+    }
 }
 
 fn non_negative(field: &str, v: f64) -> Result<f64> {
     finite(field, v)?;
-    if v >= 0.0 { Ok(v) } else { Err(VtbError::config(field, v, "must be >= 0")) }
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(VtbError::config(field, v, "must be >= 0"))
+    }
 }
 
 fn within(field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
@@ -366,7 +394,11 @@ fn within(field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
     if v >= lo - 1e-12 && v <= hi + 1e-12 {
         Ok(v)
     } else {
-        Err(VtbError::config(field, v, format!("must lie within [{lo}, {hi}] ({what})")))
+        Err(VtbError::config(
+            field,
+            v,
+            format!("must lie within [{lo}, {hi}] ({what})"),
+        ))
     }
 }
 
@@ -379,7 +411,8 @@ pub const MAX_ELEMENTS: usize = 200_000;
 
 impl Config {
     pub fn from_json(text: &str) -> Result<Config> {
-        serde_json::from_str(text).map_err(|e| VtbError::config("<config>", "(json)", e.to_string()))
+        serde_json::from_str(text)
+            .map_err(|e| VtbError::config("<config>", "(json)", e.to_string()))
     }
 
     pub fn to_json(&self) -> String {
@@ -430,15 +463,27 @@ impl Config {
         let s = &self.structure;
         let length = positive("structure.length", s.length)?;
         if s.layers.is_empty() {
-            return Err(VtbError::config("structure.layers", "[]", "at least one layer is required"));
+            return Err(VtbError::config(
+                "structure.layers",
+                "[]",
+                "at least one layer is required",
+            ));
         }
         for (i, l) in s.layers.iter().enumerate() {
             let p = format!("structure.layers[{i}]");
             if l.name.is_empty() || l.name == GROUND {
-                return Err(VtbError::config(format!("{p}.name"), format!("{:?}", l.name), "must be a non-empty name other than \"ground\""));
+                return Err(VtbError::config(
+                    format!("{p}.name"),
+                    format!("{:?}", l.name),
+                    "must be a non-empty name other than \"ground\"",
+                ));
             }
             if s.layers[..i].iter().any(|o| o.name == l.name) {
-                return Err(VtbError::config(format!("{p}.name"), format!("{:?}", l.name), "layer names must be unique"));
+                return Err(VtbError::config(
+                    format!("{p}.name"),
+                    format!("{:?}", l.name),
+                    "layer names must be unique",
+                ));
             }
             positive(&format!("{p}.density"), l.density)?;
             positive(&format!("{p}.area"), l.area)?;
@@ -446,22 +491,38 @@ impl Config {
             positive(&format!("{p}.inertia"), l.inertia)?;
             if self.discretisation.method != Method::Fem {
                 if l.modes == 0 {
-                    return Err(VtbError::config(format!("{p}.modes"), 0, "at least one sine mode is required"));
+                    return Err(VtbError::config(
+                        format!("{p}.modes"),
+                        0,
+                        "at least one sine mode is required",
+                    ));
                 }
                 if l.modes + l.local_modes > MAX_MODES {
-                    return Err(VtbError::config(format!("{p}.modes"), l.modes + l.local_modes, format!("modes + local_modes must be <= {MAX_MODES}")));
+                    return Err(VtbError::config(
+                        format!("{p}.modes"),
+                        l.modes + l.local_modes,
+                        format!("modes + local_modes must be <= {MAX_MODES}"),
+                    ));
                 }
             }
             match l.damping {
                 RayleighConfig::Ratio { ratio, f1, f2 } => {
                     let r = non_negative(&format!("{p}.damping.ratio"), ratio)?;
                     if r >= 1.0 {
-                        return Err(VtbError::config(format!("{p}.damping.ratio"), r, "must be < 1"));
+                        return Err(VtbError::config(
+                            format!("{p}.damping.ratio"),
+                            r,
+                            "must be < 1",
+                        ));
                     }
                     positive(&format!("{p}.damping.f1"), f1)?;
                     positive(&format!("{p}.damping.f2"), f2)?;
                     if f2 <= f1 {
-                        return Err(VtbError::config(format!("{p}.damping.f2"), f2, format!("must be > f1 = {f1}")));
+                        return Err(VtbError::config(
+                            format!("{p}.damping.f2"),
+                            f2,
+                            format!("must be > f1 = {f1}"),
+                        ));
                     }
                 }
                 RayleighConfig::Coefficients { alpha, beta } => {
@@ -473,14 +534,26 @@ impl Config {
         for (i, c) in s.couplings.iter().enumerate() {
             let p = format!("structure.couplings[{i}]");
             let upper = self.layer_index(&c.upper).ok_or_else(|| {
-                VtbError::config(format!("{p}.upper"), format!("{:?}", c.upper), "no layer of that name")
+                VtbError::config(
+                    format!("{p}.upper"),
+                    format!("{:?}", c.upper),
+                    "no layer of that name",
+                )
             })?;
             if c.lower != GROUND {
                 let lower = self.layer_index(&c.lower).ok_or_else(|| {
-                    VtbError::config(format!("{p}.lower"), format!("{:?}", c.lower), "no layer of that name (or \"ground\")")
+                    VtbError::config(
+                        format!("{p}.lower"),
+                        format!("{:?}", c.lower),
+                        "no layer of that name (or \"ground\")",
+                    )
                 })?;
                 if lower == upper {
-                    return Err(VtbError::config(format!("{p}.lower"), format!("{:?}", c.lower), "a layer cannot be coupled to itself"));
+                    return Err(VtbError::config(
+                        format!("{p}.lower"),
+                        format!("{:?}", c.lower),
+                        "a layer cannot be coupled to itself",
+                    ));
                 }
             }
             non_negative(&format!("{p}.stiffness"), c.stiffness)?;
@@ -488,28 +561,50 @@ impl Config {
             match c.kind {
                 CouplingKind::Discrete => {
                     if c.positions.is_empty() {
-                        return Err(VtbError::config(format!("{p}.positions"), "[]", "a discrete coupling needs at least one position"));
+                        return Err(VtbError::config(
+                            format!("{p}.positions"),
+                            "[]",
+                            "a discrete coupling needs at least one position",
+                        ));
                     }
                     for (j, &x) in c.positions.iter().enumerate() {
-                        within(&format!("{p}.positions[{j}]"), x, 0.0, length, "the structure")?;
+                        within(
+                            &format!("{p}.positions[{j}]"),
+                            x,
+                            0.0,
+                            length,
+                            "the structure",
+                        )?;
                     }
                 }
                 CouplingKind::Continuous => {
                     if !c.positions.is_empty() {
-                        return Err(VtbError::config(format!("{p}.positions"), format!("{:?}", c.positions), "a continuous coupling takes no positions"));
+                        return Err(VtbError::config(
+                            format!("{p}.positions"),
+                            format!("{:?}", c.positions),
+                            "a continuous coupling takes no positions",
+                        ));
                     }
                 }
             }
         }
         let d = &self.discretisation;
         if d.method == Method::Fem && !(2..=MAX_ELEMENTS).contains(&d.fem_elements) {
-            return Err(VtbError::config("discretisation.fem_elements", d.fem_elements, format!("must be within [2, {MAX_ELEMENTS}]")));
+            return Err(VtbError::config(
+                "discretisation.fem_elements",
+                d.fem_elements,
+                format!("must be within [2, {MAX_ELEMENTS}]"),
+            ));
         }
         if let Some(w) = d.omega_r {
             positive("discretisation.omega_r", w)?;
         }
         if d.method == Method::Hybrid && s.layers[0].local_modes == 0 {
-            return Err(VtbError::config("structure.layers[0].local_modes", 0, "the hybrid method needs local modes on the top layer"));
+            return Err(VtbError::config(
+                "structure.layers[0].local_modes",
+                0,
+                "the hybrid method needs local modes on the top layer",
+            ));
         }
 
         let speed = non_negative("speed", self.speed)?;
@@ -519,32 +614,63 @@ impl Config {
         non_negative("solver.gravity", sv.gravity)?;
         positive("solver.contact_tol", sv.contact_tol)?;
         if sv.contact_max_iter == 0 {
-            return Err(VtbError::config("solver.contact_max_iter", 0, "must be >= 1"));
+            return Err(VtbError::config(
+                "solver.contact_max_iter",
+                0,
+                "must be >= 1",
+            ));
         }
         if let Some(t) = sv.t_end {
             positive("solver.t_end", t)?;
         } else if speed == 0.0 {
-            return Err(VtbError::config("solver.t_end", "None", "an end time is required when speed = 0"));
+            return Err(VtbError::config(
+                "solver.t_end",
+                "None",
+                "an end time is required when speed = 0",
+            ));
         }
         let t_end = self.t_end();
         if !(t_end > 0.0) {
-            return Err(VtbError::config("solver.t_end", t_end, "the run would have no duration: the leading wheel/force starts within end_margin of the end of the structure"));
+            return Err(VtbError::config(
+                "solver.t_end",
+                t_end,
+                "the run would have no duration: the leading wheel/force starts within end_margin of the end of the structure",
+            ));
         }
         let steps = t_end / dt;
         if steps > MAX_STEPS as f64 {
-            return Err(VtbError::config("solver.dt", dt, format!("t_end / dt = {steps:.3e} steps exceeds the limit of {MAX_STEPS}")));
+            return Err(VtbError::config(
+                "solver.dt",
+                dt,
+                format!("t_end / dt = {steps:.3e} steps exceeds the limit of {MAX_STEPS}"),
+            ));
         }
         let travel = speed * self.n_steps() as f64 * dt;
 
         for (i, v) in self.vehicles.iter().enumerate() {
             let p = format!("vehicles[{i}]");
-            for (name, val) in [("m_c", v.m_c), ("j_c", v.j_c), ("m_t", v.m_t), ("j_t", v.j_t), ("m_w", v.m_w), ("k_s", v.k_s), ("k_p", v.k_p), ("l_c", v.l_c), ("l_t", v.l_t), ("wheel_radius", v.wheel_radius)] {
+            for (name, val) in [
+                ("m_c", v.m_c),
+                ("j_c", v.j_c),
+                ("m_t", v.m_t),
+                ("j_t", v.j_t),
+                ("m_w", v.m_w),
+                ("k_s", v.k_s),
+                ("k_p", v.k_p),
+                ("l_c", v.l_c),
+                ("l_t", v.l_t),
+                ("wheel_radius", v.wheel_radius),
+            ] {
                 positive(&format!("{p}.{name}"), val)?;
             }
             non_negative(&format!("{p}.c_s"), v.c_s)?;
             non_negative(&format!("{p}.c_p"), v.c_p)?;
             if v.l_t >= v.l_c {
-                return Err(VtbError::config(format!("{p}.l_t"), v.l_t, format!("half wheelbase must be smaller than l_c = {}", v.l_c)));
+                return Err(VtbError::config(
+                    format!("{p}.l_t"),
+                    v.l_t,
+                    format!("half wheelbase must be smaller than l_c = {}", v.l_c),
+                ));
             }
             if v.rails == 0 {
                 return Err(VtbError::config(format!("{p}.rails"), 0, "must be >= 1"));
@@ -556,13 +682,33 @@ impl Config {
             let offs = v.wheel_offsets();
             let (rear, front) = (offs[3], offs[0] + travel);
             if rear < -1e-9 {
-                return Err(VtbError::config(format!("{p}.x_front"), v.x_front, format!("the rear wheelset starts at x = {rear:.4} m, off the structure [0, {length}]")));
+                return Err(VtbError::config(
+                    format!("{p}.x_front"),
+                    v.x_front,
+                    format!(
+                        "the rear wheelset starts at x = {rear:.4} m, off the structure [0, {length}]"
+                    ),
+                ));
             }
             if front > length + 1e-9 {
-                return Err(VtbError::config(format!("{p}.x_front"), v.x_front, format!("the leading wheelset would reach x = {front:.4} m by t_end = {t_end:.4} s, beyond the structure length {length}")));
+                return Err(VtbError::config(
+                    format!("{p}.x_front"),
+                    v.x_front,
+                    format!(
+                        "the leading wheelset would reach x = {front:.4} m by t_end = {t_end:.4} s, beyond the structure length {length}"
+                    ),
+                ));
             }
-            if !profile.values.is_empty() && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9) {
-                return Err(VtbError::config("irregularity", format!("[{}, {}]", profile.x0, profile.x_last()), format!("the profile must cover the wheel travel [{rear:.4}, {front:.4}] m of vehicle {i}")));
+            if !profile.values.is_empty()
+                && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9)
+            {
+                return Err(VtbError::config(
+                    "irregularity",
+                    format!("[{}, {}]", profile.x0, profile.x_last()),
+                    format!(
+                        "the profile must cover the wheel travel [{rear:.4}, {front:.4}] m of vehicle {i}"
+                    ),
+                ));
             }
         }
         for (i, f) in self.forces.iter().enumerate() {
@@ -570,28 +716,62 @@ impl Config {
             finite(&format!("{p}.magnitude"), f.magnitude)?;
             within(&format!("{p}.x0"), f.x0, 0.0, length, "the structure")?;
             if f.x0 + travel > length + 1e-9 {
-                return Err(VtbError::config(format!("{p}.x0"), f.x0, format!("the force would reach x = {:.4} m by t_end, beyond the structure length {length}", f.x0 + travel)));
+                return Err(VtbError::config(
+                    format!("{p}.x0"),
+                    f.x0,
+                    format!(
+                        "the force would reach x = {:.4} m by t_end, beyond the structure length {length}",
+                        f.x0 + travel
+                    ),
+                ));
             }
             if let Some(layer) = &f.layer {
                 if self.layer_index(layer).is_none() {
-                    return Err(VtbError::config(format!("{p}.layer"), format!("{layer:?}"), "no layer of that name"));
+                    return Err(VtbError::config(
+                        format!("{p}.layer"),
+                        format!("{layer:?}"),
+                        "no layer of that name",
+                    ));
                 }
             }
         }
         if self.vehicles.is_empty() && self.forces.is_empty() {
-            return Err(VtbError::config("vehicles", "[]", "nothing loads the structure: give at least one vehicle or moving force"));
+            return Err(VtbError::config(
+                "vehicles",
+                "[]",
+                "nothing loads the structure: give at least one vehicle or moving force",
+            ));
         }
         for (i, &x) in self.output.points.iter().enumerate() {
-            within(&format!("output.points[{i}]"), x, 0.0, length, "the structure")?;
+            within(
+                &format!("output.points[{i}]"),
+                x,
+                0.0,
+                length,
+                "the structure",
+            )?;
         }
         if !profile.values.is_empty() {
             positive("irregularity.dx", profile.dx)?;
             finite("irregularity.x0", profile.x0)?;
             if profile.values.len() < 2 {
-                return Err(VtbError::config("irregularity", profile.values.len(), "a sampled profile needs at least 2 samples"));
+                return Err(VtbError::config(
+                    "irregularity",
+                    profile.values.len(),
+                    "a sampled profile needs at least 2 samples",
+                ));
             }
-            if let Some((j, v)) = profile.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(VtbError::config(format!("irregularity[{j}]"), v, "must be finite"));
+            if let Some((j, v)) = profile
+                .values
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(VtbError::config(
+                    format!("irregularity[{j}]"),
+                    v,
+                    "must be finite",
+                ));
             }
         }
         if let Some(t) = &self.tids {
@@ -605,20 +785,46 @@ impl Config {
         non_negative("tids.stiffness", t.stiffness)?;
         non_negative("tids.damping", t.damping)?;
         if t.count == 0 {
-            return Err(VtbError::config("tids.count", 0, "must be >= 1 (omit `tids` for no dampers)"));
+            return Err(VtbError::config(
+                "tids.count",
+                0,
+                "must be >= 1 (omit `tids` for no dampers)",
+            ));
         }
         within("tids.x0", t.x0, 0.0, length, "the structure")?;
         if t.count > 1 {
             positive("tids.spacing", t.spacing)?;
             let last = t.x0 + t.spacing * (t.count - 1) as f64;
             if last > length + 1e-9 {
-                return Err(VtbError::config("tids.count", t.count, format!("the last damper would sit at x = {last:.4} m, beyond the structure length {length}")));
+                return Err(VtbError::config(
+                    "tids.count",
+                    t.count,
+                    format!(
+                        "the last damper would sit at x = {last:.4} m, beyond the structure length {length}"
+                    ),
+                ));
             }
         }
-        let upper = self.layer_index(&t.upper).ok_or_else(|| VtbError::config("tids.upper", format!("{:?}", t.upper), "no layer of that name"))?;
-        let lower = self.layer_index(&t.lower).ok_or_else(|| VtbError::config("tids.lower", format!("{:?}", t.lower), "no layer of that name"))?;
+        let upper = self.layer_index(&t.upper).ok_or_else(|| {
+            VtbError::config(
+                "tids.upper",
+                format!("{:?}", t.upper),
+                "no layer of that name",
+            )
+        })?;
+        let lower = self.layer_index(&t.lower).ok_or_else(|| {
+            VtbError::config(
+                "tids.lower",
+                format!("{:?}", t.lower),
+                "no layer of that name",
+            )
+        })?;
         if upper == lower {
-            return Err(VtbError::config("tids.lower", format!("{:?}", t.lower), "must differ from tids.upper"));
+            return Err(VtbError::config(
+                "tids.lower",
+                format!("{:?}", t.lower),
+                "must differ from tids.upper",
+            ));
         }
         Ok(())
     }

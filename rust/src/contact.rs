@@ -11,13 +11,21 @@ use crate::error::{Result, VtbError};
 /// Contact force (N) of a compression δ (m).
 #[inline]
 pub fn force(g: f64, delta: f64) -> f64 {
-    if delta > 0.0 { (delta / g).powf(1.5) } else { 0.0 }
+    if delta > 0.0 {
+        (delta / g).powf(1.5)
+    } else {
+        0.0
+    }
 }
 
 /// dP/dδ (N/m); k_H = 3·P^{1/3}/(2G) at a load P.
 #[inline]
 pub fn stiffness(g: f64, delta: f64) -> f64 {
-    if delta > 0.0 { 1.5 * delta.sqrt() / g.powf(1.5) } else { 0.0 }
+    if delta > 0.0 {
+        1.5 * delta.sqrt() / g.powf(1.5)
+    } else {
+        0.0
+    }
 }
 
 /// Compression δ = G·P^{2/3} carrying a load P.
@@ -48,7 +56,15 @@ pub struct ContactSolver {
 }
 
 /// Residual R = P − h(δ_free − A·P) into `res` (and δ into `delta`); returns max |R_i|/P_ref,i.
-fn residual(p: &[f64], delta_free: &[f64], a: &[f64], g: &[f64], p_ref: &[f64], delta: &mut [f64], res: &mut [f64]) -> f64 {
+fn residual(
+    p: &[f64],
+    delta_free: &[f64],
+    a: &[f64],
+    g: &[f64],
+    p_ref: &[f64],
+    delta: &mut [f64],
+    res: &mut [f64],
+) -> f64 {
     let n = p.len();
     let mut worst: f64 = 0.0;
     for i in 0..n {
@@ -66,14 +82,40 @@ fn residual(p: &[f64], delta_free: &[f64], a: &[f64], g: &[f64], p_ref: &[f64], 
 impl ContactSolver {
     pub fn new(g: Vec<f64>, p_ref: Vec<f64>, tol: f64, max_iter: usize) -> Self {
         let n = g.len();
-        Self { n, g, p_ref, tol, max_iter, jac: vec![0.0; n * n], res: vec![0.0; n], dp: vec![0.0; n], delta: vec![0.0; n], trial: vec![0.0; n] }
+        Self {
+            n,
+            g,
+            p_ref,
+            tol,
+            max_iter,
+            jac: vec![0.0; n * n],
+            res: vec![0.0; n],
+            dp: vec![0.0; n],
+            delta: vec![0.0; n],
+            trial: vec![0.0; n],
+        }
     }
 
     /// Solves for the forces `p` (initial guess in, solution out); `a` is row-major n×n.
     /// Returns the number of Newton iterations taken.
-    pub fn solve(&mut self, p: &mut [f64], delta_free: &[f64], a: &[f64], time: f64, step: usize) -> Result<usize> {
+    pub fn solve(
+        &mut self,
+        p: &mut [f64],
+        delta_free: &[f64],
+        a: &[f64],
+        time: f64,
+        step: usize,
+    ) -> Result<usize> {
         let n = self.n;
-        let mut rnorm = residual(p, delta_free, a, &self.g, &self.p_ref, &mut self.delta, &mut self.res);
+        let mut rnorm = residual(
+            p,
+            delta_free,
+            a,
+            &self.g,
+            &self.p_ref,
+            &mut self.delta,
+            &mut self.res,
+        );
         if rnorm <= self.tol {
             return Ok(0);
         }
@@ -93,7 +135,15 @@ impl ContactSolver {
                 for i in 0..n {
                     self.trial[i] = p[i] + lambda * self.dp[i];
                 }
-                let r_new = residual(&self.trial, delta_free, a, &self.g, &self.p_ref, &mut self.delta, &mut self.res);
+                let r_new = residual(
+                    &self.trial,
+                    delta_free,
+                    a,
+                    &self.g,
+                    &self.p_ref,
+                    &mut self.delta,
+                    &mut self.res,
+                );
                 if r_new < rnorm || r_new <= self.tol {
                     p.copy_from_slice(&self.trial);
                     rnorm = r_new;
@@ -109,8 +159,15 @@ impl ContactSolver {
                 return Ok(it);
             }
         }
-        let residual = (0..n).map(|i| (self.res[i] / self.p_ref[i]).abs() * self.p_ref[i]).fold(0.0, f64::max);
-        Err(VtbError::ContactNotConverged { time, step, residual, iterations: self.max_iter })
+        let residual = (0..n)
+            .map(|i| (self.res[i] / self.p_ref[i]).abs() * self.p_ref[i])
+            .fold(0.0, f64::max);
+        Err(VtbError::ContactNotConverged {
+            time,
+            step,
+            residual,
+            iterations: self.max_iter,
+        })
     }
 }
 
@@ -157,7 +214,10 @@ mod tests {
     /// k_H = 1.21e9 N/m at 70 kN; R = 0.43 m → 88.0 µm, 1.19e9 N/m.
     #[test]
     fn hertz_static_compression_and_linearised_stiffness() {
-        for (r, g_want, d_want, k_want) in [(0.46, 5.131e-8, 87.1e-6, 1.21e9), (0.43, 5.182e-8, 88.0e-6, 1.19e9)] {
+        for (r, g_want, d_want, k_want) in [
+            (0.46, 5.131e-8, 87.1e-6, 1.21e9),
+            (0.43, 5.182e-8, 88.0e-6, 1.19e9),
+        ] {
             let g = 4.57e-8 * f64::powf(r, -0.149);
             assert!((g - g_want).abs() < 0.001 * g_want, "G({r}) = {g}");
             let d0 = compression(g, 70e3);

@@ -53,7 +53,11 @@ impl Default for PointAccumulator {
 
 impl PointAccumulator {
     pub fn new() -> Self {
-        Self { dofs: Vec::new(), block: Vec::new(), n: Vec::new() }
+        Self {
+            dofs: Vec::new(),
+            block: Vec::new(),
+            n: Vec::new(),
+        }
     }
 
     /// Adds `w`·n·nᵀ for n = [N_a; −N_b] (shape vectors in structure numbering).

@@ -36,7 +36,11 @@ pub enum VtbError {
 }
 
 impl VtbError {
-    pub fn config(field: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
+    pub fn config(
+        field: impl Into<String>,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> Self {
         VtbError::Config {
             field: field.into(),
             value: value.to_string(),

@@ -43,11 +43,15 @@ mod tests {
     fn indices_of_known_signals() {
         // Decaying burst: |a| = 10 at i = 0, then 10·0.9^i; 5 % of 10 is reached when
         // 0.9^i < 0.05 → i ≥ 29 (0.9^28 = 0.0523, 0.9^29 = 0.0471).
-        let a: Vec<f64> = (0..100).map(|i| 10.0 * 0.9f64.powi(i) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let a: Vec<f64> = (0..100)
+            .map(|i| 10.0 * 0.9f64.powi(i) * if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         assert_eq!(amplitude(&a), 10.0);
         assert!((settle_time(&a, 0.01, 0.05) - 0.28).abs() < 1e-12);
         // RMS of a full-period sine of amplitude 2 is √2.
-        let s: Vec<f64> = (0..1000).map(|i| 2.0 * (2.0 * std::f64::consts::PI * i as f64 / 1000.0).sin()).collect();
+        let s: Vec<f64> = (0..1000)
+            .map(|i| 2.0 * (2.0 * std::f64::consts::PI * i as f64 / 1000.0).sin())
+            .collect();
         assert!((rms(&s) - 2f64.sqrt()).abs() < 1e-12);
         assert!((reduction(1005.6, 841.0) - 0.16368).abs() < 1e-4);
         // Hand-computed: (0.164280 + 0.084706 + 0.028519)/3.

@@ -23,7 +23,7 @@
 
 use crate::basis::Shape;
 use crate::error::Result;
-use crate::sparse::{CsrMatrix, Ldlt, PairOperator};
+use crate::sparse::{CsrMatrix, Ldlt, SymOperator};
 
 /// Port columns forward-substituted together (one car: four wheelsets).
 pub const GW: usize = 4;
@@ -37,12 +37,19 @@ pub struct Gathered {
 
 impl Gathered {
     pub fn from_shape(s: &Shape, inv: &[usize]) -> Self {
-        Self { idx: (0..s.values.len()).map(|k| inv[s.start + k]).collect(), val: s.values.clone() }
+        Self {
+            idx: (0..s.values.len()).map(|k| inv[s.start + k]).collect(),
+            val: s.values.clone(),
+        }
     }
 
     #[inline]
     pub fn dot(&self, x: &[f64]) -> f64 {
-        self.idx.iter().zip(&self.val).map(|(&i, &v)| v * x[i]).sum()
+        self.idx
+            .iter()
+            .zip(&self.val)
+            .map(|(&i, &v)| v * x[i])
+            .sum()
     }
 }
 
@@ -59,7 +66,11 @@ pub struct PortBlock {
 
 impl PortBlock {
     pub fn new(n: usize) -> Self {
-        Self { cols: vec![0.0; n * GW], start: n, shapes: Default::default() }
+        Self {
+            cols: vec![0.0; n * GW],
+            start: n,
+            shapes: Default::default(),
+        }
     }
 
     /// Clears the columns (only the part a previous forward solve could have filled).
@@ -102,15 +113,16 @@ pub struct Newmark {
     pub n: usize,
     pub dt: f64,
     factor: Ldlt,
-    pair: PairOperator,
-    /// Displacements, permuted numbering.
+    /// M and K for the products M·v̄ and K·v̄ (solver numbering).
+    m_op: SymOperator,
+    k_op: SymOperator,
+    /// Displacements, solver numbering.
     pub u: Vec<f64>,
     q: Vec<f64>,
     s: Vec<f64>,
     /// Right-hand side during a step (forward-substituted); v̄ after `end_step`.
     z: Vec<f64>,
-    /// v̄, (4M − Δt²K)·v̄ and K·v̄ in the original numbering.
-    xo: Vec<f64>,
+    /// M·v̄ and K·v̄.
     y1: Vec<f64>,
     y2: Vec<f64>,
     obs: Vec<Gathered>,
@@ -121,23 +133,30 @@ pub struct Newmark {
 impl Newmark {
     /// `ports` lists the unknowns contact forces act on (they are eliminated late so that
     /// port vectors forward-substitute cheaply).
-    pub fn new(m: &CsrMatrix, c: &CsrMatrix, k: &CsrMatrix, dt: f64, ports: &[usize]) -> Result<Self> {
+    pub fn new(
+        m: &CsrMatrix,
+        c: &CsrMatrix,
+        k: &CsrMatrix,
+        dt: f64,
+        ports: &[usize],
+    ) -> Result<Self> {
         let n = m.n;
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
         let factor = Ldlt::for_stepping(&a, ports)?;
-        // The pair product runs in the original numbering, where the heavy rows of modal
-        // bases are contiguous.
-        let pair = PairOperator::new(&CsrMatrix::combine(&[(4.0, m), (-dt * dt, k)]), k);
+        let (m_op, k_op) = (
+            SymOperator::new(m, &factor.perm),
+            SymOperator::new(k, &factor.perm),
+        );
         Ok(Self {
             n,
             dt,
             factor,
-            pair,
+            m_op,
+            k_op,
             u: vec![0.0; n],
             q: vec![0.0; n],
             s: vec![0.0; n],
             z: vec![0.0; n],
-            xo: vec![0.0; n],
             y1: vec![0.0; n],
             y2: vec![0.0; n],
             obs: Vec::new(),
@@ -272,17 +291,18 @@ impl Newmark {
     pub fn end_step(&mut self) {
         self.factor.diag_backward(&mut self.z);
         let dt = self.dt;
-        let perm = &self.factor.perm;
-        for (k, &i) in perm.iter().enumerate() {
-            self.xo[i] = self.z[k];
-        }
-        self.pair.mul(&self.xo, &mut self.y1, &mut self.y2);
-        for (k, &i) in perm.iter().enumerate() {
+        self.m_op.mul(&self.z, &mut self.y1);
+        self.k_op.mul(&self.z, &mut self.y2);
+        for k in 0..self.n {
             self.u[k] += dt * self.z[k];
-            self.q[k] = self.y1[i] - self.q[k] - 2.0 * dt * self.s[k];
-            self.s[k] += dt * self.y2[i];
+            self.q[k] = 4.0 * self.y1[k] - dt * dt * self.y2[k] - self.q[k] - 2.0 * dt * self.s[k];
+            self.s[k] += dt * self.y2[k];
         }
-        for (o, (ov, oa)) in self.obs.iter().zip(self.obs_v.iter_mut().zip(self.obs_a.iter_mut())) {
+        for (o, (ov, oa)) in self
+            .obs
+            .iter()
+            .zip(self.obs_v.iter_mut().zip(self.obs_a.iter_mut()))
+        {
             let nv = o.dot(&self.z);
             *oa = 4.0 * (nv - *ov) / dt - *oa;
             *ov = 2.0 * nv - *ov;
@@ -308,11 +328,19 @@ mod tests {
     #[test]
     fn newmark_sdof_period_elongation_matches_exact_formula() {
         let w = 2.0 * std::f64::consts::PI;
-        for (ratio, elong) in [(0.01, 1.00033), (0.05, 1.00817), (0.1, 1.03207), (0.2, 1.12003)] {
+        for (ratio, elong) in [
+            (0.01, 1.00033),
+            (0.05, 1.00817),
+            (0.1, 1.03207),
+            (0.2, 1.12003),
+        ] {
             let dt = ratio;
             let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
             let mut nm = Newmark::new(&m, &c, &k, dt, &[]).unwrap();
-            nm.observe(&Shape { start: 0, values: vec![1.0] });
+            nm.observe(&Shape {
+                start: 0,
+                values: vec![1.0],
+            });
             nm.set_state(&[1.0], &[0.0], &[-w * w], &k, &m);
             let wbar = 2.0 / dt * (w * dt / 2.0).atan();
             assert!((w / wbar - elong).abs() < 5e-6, "T̄/T = {}", w / wbar);
@@ -323,7 +351,10 @@ mod tests {
                 nm.end_step();
                 let (u, _, a) = nm.observed(0);
                 let t = step as f64 * dt;
-                assert!((u - (wbar * t).cos()).abs() < 1e-9, "Δt/T={ratio} step {step}: {u}");
+                assert!(
+                    (u - (wbar * t).cos()).abs() < 1e-9,
+                    "Δt/T={ratio} step {step}: {u}"
+                );
                 // Newmark's acceleration of a free SDOF is −ω²u exactly.
                 assert!((a + w * w * u).abs() < 1e-7 * w * w);
                 peak = peak.max(u.abs());

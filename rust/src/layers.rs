@@ -20,14 +20,33 @@ pub struct Layer {
 }
 
 impl Layer {
-    pub fn new(cfg: &LayerConfig, length: f64, method: Method, fem_elements: usize, offset: usize) -> Self {
+    pub fn new(
+        cfg: &LayerConfig,
+        length: f64,
+        method: Method,
+        fem_elements: usize,
+        offset: usize,
+    ) -> Self {
         let rho_a = cfg.density * cfg.area;
         let basis = match method {
-            Method::Fem => LayerBasis::Fem(FemBasis { length, n_elements: fem_elements }),
-            Method::Modal | Method::Hybrid => LayerBasis::Modal(ModalBasis::new(length, rho_a, cfg.modes)),
+            Method::Fem => LayerBasis::Fem(FemBasis {
+                length,
+                n_elements: fem_elements,
+            }),
+            Method::Modal | Method::Hybrid => {
+                LayerBasis::Modal(ModalBasis::new(length, rho_a, cfg.modes))
+            }
         };
         let (alpha, beta) = cfg.damping.coefficients();
-        Self { name: cfg.name.clone(), basis, offset, rho_a, ei: cfg.youngs_modulus * cfg.inertia, alpha, beta }
+        Self {
+            name: cfg.name.clone(),
+            basis,
+            offset,
+            rho_a,
+            ei: cfg.youngs_modulus * cfg.inertia,
+            alpha,
+            beta,
+        }
     }
 
     pub fn n_dofs(&self) -> usize {
@@ -91,7 +110,11 @@ pub fn gram_blocks(a: &Layer, b: &Layer, d: Derivative) -> Vec<Block> {
         let (lo, hi) = (pa[i].a.max(pb[j].a), pa[i].b.min(pb[j].b));
         if hi > lo {
             let fa = piece_funcs(&pa[i], d);
-            let fb = if same && i == j { fa.clone() } else { piece_funcs(&pb[j], d) };
+            let fb = if same && i == j {
+                fa.clone()
+            } else {
+                piece_funcs(&pb[j], d)
+            };
             let mut data = vec![0.0; fa.len() * fb.len()];
             for (r, (_, f)) in fa.iter().enumerate() {
                 for (c, (_, g)) in fb.iter().enumerate() {
@@ -128,7 +151,10 @@ mod tests {
             inertia: 3.217e-5,
             modes,
             local_modes: 0,
-            damping: RayleighConfig::Coefficients { alpha: 0.0, beta: 0.0 },
+            damping: RayleighConfig::Coefficients {
+                alpha: 0.0,
+                beta: 0.0,
+            },
         };
         Layer::new(&cfg, 32.0, method, 40, 0)
     }
@@ -139,7 +165,9 @@ mod tests {
         let m = &gram_blocks(&l, &l, Derivative::Value)[0];
         let k = &gram_blocks(&l, &l, Derivative::Curvature)[0];
         let n = m.rows.len();
-        let LayerBasis::Modal(b) = &l.basis else { unreachable!() };
+        let LayerBasis::Modal(b) = &l.basis else {
+            unreachable!()
+        };
         for p in 4..n {
             for q in 4..n {
                 let mv = l.rho_a * m.data[p * n + q];
@@ -162,8 +190,42 @@ mod tests {
         let m = &gram_blocks(&l, &l, Derivative::Value)[3];
         let k = &gram_blocks(&l, &l, Derivative::Curvature)[3];
         let le = 32.0 / 40.0;
-        let mm = [156.0, 22.0 * le, 54.0, -13.0 * le, 22.0 * le, 4.0 * le * le, 13.0 * le, -3.0 * le * le, 54.0, 13.0 * le, 156.0, -22.0 * le, -13.0 * le, -3.0 * le * le, -22.0 * le, 4.0 * le * le];
-        let kk = [12.0, 6.0 * le, -12.0, 6.0 * le, 6.0 * le, 4.0 * le * le, -6.0 * le, 2.0 * le * le, -12.0, -6.0 * le, 12.0, -6.0 * le, 6.0 * le, 2.0 * le * le, -6.0 * le, 4.0 * le * le];
+        let mm = [
+            156.0,
+            22.0 * le,
+            54.0,
+            -13.0 * le,
+            22.0 * le,
+            4.0 * le * le,
+            13.0 * le,
+            -3.0 * le * le,
+            54.0,
+            13.0 * le,
+            156.0,
+            -22.0 * le,
+            -13.0 * le,
+            -3.0 * le * le,
+            -22.0 * le,
+            4.0 * le * le,
+        ];
+        let kk = [
+            12.0,
+            6.0 * le,
+            -12.0,
+            6.0 * le,
+            6.0 * le,
+            4.0 * le * le,
+            -6.0 * le,
+            2.0 * le * le,
+            -12.0,
+            -6.0 * le,
+            12.0,
+            -6.0 * le,
+            6.0 * le,
+            2.0 * le * le,
+            -6.0 * le,
+            4.0 * le * le,
+        ];
         for i in 0..16 {
             assert!((m.data[i] - mm[i] * le / 420.0).abs() < 1e-13, "m[{i}]");
             assert!((k.data[i] - kk[i] / le.powi(3)).abs() < 1e-10, "k[{i}]");

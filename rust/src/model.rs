@@ -19,6 +19,11 @@ impl Model {
         cfg.validate(&profile)?;
         let structure = Structure::build(&cfg)?;
         let cars = cfg.vehicles.iter().map(Car::new).collect();
-        Ok(Self { cfg, profile, structure, cars })
+        Ok(Self {
+            cfg,
+            profile,
+            structure,
+            cars,
+        })
     }
 }

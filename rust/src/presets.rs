@@ -6,8 +6,11 @@ use crate::config::*;
 /// CRH3 car, parameter set A of physics-data.md §1.2 (Zeng et al., Shock Vib. 2014, Table 1):
 /// `motor = false` for the trailer, `true` for the motor car. Wheel radius 0.46 m.
 pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
-    let (m_c, m_t, j_t, k_s, c_s, k_p, c_p) =
-        if motor { (4.8e4, 3.2e3, 7.2e3, 8.0e5, 9.0e4, 2.08e6, 6.0e4) } else { (4.4e4, 2.4e3, 2.2e3, 6.0e5, 8.0e4, 1.4e6, 8.0e4) };
+    let (m_c, m_t, j_t, k_s, c_s, k_p, c_p) = if motor {
+        (4.8e4, 3.2e3, 7.2e3, 8.0e5, 9.0e4, 2.08e6, 6.0e4)
+    } else {
+        (4.4e4, 2.4e3, 2.2e3, 6.0e5, 8.0e4, 1.4e6, 8.0e4)
+    };
     VehicleConfig {
         m_c,
         j_c: 2.7e6,
@@ -35,10 +38,26 @@ pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
 /// 5–50 Hz (first bending ≈ 6 Hz).
 pub fn table1_damping() -> [RayleighConfig; 4] {
     [
-        RayleighConfig::Ratio { ratio: 0.01, f1: 100.0, f2: 1000.0 },
-        RayleighConfig::Ratio { ratio: 0.05, f1: 20.0, f2: 1000.0 },
-        RayleighConfig::Ratio { ratio: 0.05, f1: 20.0, f2: 1000.0 },
-        RayleighConfig::Ratio { ratio: 0.02, f1: 5.0, f2: 50.0 },
+        RayleighConfig::Ratio {
+            ratio: 0.01,
+            f1: 100.0,
+            f2: 1000.0,
+        },
+        RayleighConfig::Ratio {
+            ratio: 0.05,
+            f1: 20.0,
+            f2: 1000.0,
+        },
+        RayleighConfig::Ratio {
+            ratio: 0.05,
+            f1: 20.0,
+            f2: 1000.0,
+        },
+        RayleighConfig::Ratio {
+            ratio: 0.02,
+            f1: 5.0,
+            f2: 50.0,
+        },
     ]
 }
 
@@ -63,16 +82,48 @@ pub fn table1_structure() -> StructureConfig {
     StructureConfig {
         length,
         layers: vec![
-            layer("rail", 7800.0, 7.745e-3, 2.1e11, 3.217e-5, 120, 100, damping[0]),
+            layer(
+                "rail", 7800.0, 7.745e-3, 2.1e11, 3.217e-5, 120, 100, damping[0],
+            ),
             layer("slab", 2500.0, 0.51, 3.9e10, 1.7e-3, 120, 0, damping[1]),
-            layer("base", 2500.0, 0.885, 3.62e10, 6.6375e-3, 120, 0, damping[2]),
+            layer(
+                "base", 2500.0, 0.885, 3.62e10, 6.6375e-3, 120, 0, damping[2],
+            ),
             layer("bridge", 2500.0, 8.75, 3.945e10, 9.25, 50, 0, damping[3]),
         ],
         couplings: vec![
-            CouplingConfig { upper: "rail".into(), lower: "slab".into(), kind: CouplingKind::Discrete, stiffness: 6e7, damping: 4.77e4, positions: fasteners },
-            CouplingConfig { upper: "slab".into(), lower: "base".into(), kind: CouplingKind::Continuous, stiffness: 9e8, damping: 8.3e4, positions: vec![] },
-            CouplingConfig { upper: "base".into(), lower: "bridge".into(), kind: CouplingKind::Continuous, stiffness: 1e8, damping: 2.48e5, positions: vec![] },
-            CouplingConfig { upper: "bridge".into(), lower: GROUND.into(), kind: CouplingKind::Discrete, stiffness: 1e15, damping: 0.0, positions: piers },
+            CouplingConfig {
+                upper: "rail".into(),
+                lower: "slab".into(),
+                kind: CouplingKind::Discrete,
+                stiffness: 6e7,
+                damping: 4.77e4,
+                positions: fasteners,
+            },
+            CouplingConfig {
+                upper: "slab".into(),
+                lower: "base".into(),
+                kind: CouplingKind::Continuous,
+                stiffness: 9e8,
+                damping: 8.3e4,
+                positions: vec![],
+            },
+            CouplingConfig {
+                upper: "base".into(),
+                lower: "bridge".into(),
+                kind: CouplingKind::Continuous,
+                stiffness: 1e8,
+                damping: 2.48e5,
+                positions: vec![],
+            },
+            CouplingConfig {
+                upper: "bridge".into(),
+                lower: GROUND.into(),
+                kind: CouplingKind::Discrete,
+                stiffness: 1e15,
+                damping: 0.0,
+                positions: piers,
+            },
         ],
     }
 }

@@ -40,7 +40,14 @@ pub struct RunResult {
 }
 
 impl RunResult {
-    pub fn new(cfg: &Config, st: &Structure, n_steps: usize, n_points: usize, n_cars: usize, n_wheels: usize) -> Self {
+    pub fn new(
+        cfg: &Config,
+        st: &Structure,
+        n_steps: usize,
+        n_points: usize,
+        n_cars: usize,
+        n_wheels: usize,
+    ) -> Self {
         let nl = st.layers.len();
         let len = n_steps + 1;
         Self {
@@ -108,7 +115,12 @@ impl RunResult {
             m.insert("car_acc_rms".into(), rms(&a));
         }
         if self.n_wheels > 0 {
-            let (lo, hi) = self.contact_force.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+            let (lo, hi) = self
+                .contact_force
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(*v), hi.max(*v))
+                });
             m.insert("contact_force_max".into(), hi);
             m.insert("contact_force_min".into(), lo);
             m.insert("contact_loss_events".into(), self.contact_loss.len() as f64);

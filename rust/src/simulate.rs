@@ -29,7 +29,11 @@ pub struct Job {
 
 /// Runs the jobs in parallel on the current rayon pool and returns each job's metrics or its
 /// error, in input order. `done` counts finished jobs (for progress reporting).
-pub fn run_batch(jobs: &[Job], cancel: Option<&AtomicBool>, done: Option<&AtomicUsize>) -> Vec<Result<BTreeMap<String, f64>>> {
+pub fn run_batch(
+    jobs: &[Job],
+    cancel: Option<&AtomicBool>,
+    done: Option<&AtomicUsize>,
+) -> Vec<Result<BTreeMap<String, f64>>> {
     jobs.par_iter()
         .map(|job| {
             let r = simulate(&job.config, &job.profile, cancel).map(|res| res.metrics());
@@ -81,16 +85,35 @@ impl CarRun {
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
         let mut nm = Newmark::new(&m, &c, &k, dt, &[])?;
         for i in 0..N_DOF {
-            nm.observe(&Shape { start: i, values: vec![1.0] });
+            nm.observe(&Shape {
+                start: i,
+                values: vec![1.0],
+            });
         }
         let mut ports = PortBlock::new(N_DOF);
         for w in 0..N_WHEELS {
-            ports.set(w, &Gathered { idx: vec![nm.inv()[WHEEL0 + w]], val: vec![1.0] });
+            ports.set(
+                w,
+                &Gathered {
+                    idx: vec![nm.inv()[WHEEL0 + w]],
+                    val: vec![1.0],
+                },
+            );
         }
         nm.forward_ports(&mut ports);
         let compliance = nm.port_compliance(&ports, &ports);
         let gravity = nm.to_permuted(&car.gravity(g));
-        Ok(Self { car: car.clone(), nm, m, k, ports, compliance, f_prev: gravity.clone(), gravity, z0: vec![0.0; N_DOF] })
+        Ok(Self {
+            car: car.clone(),
+            nm,
+            m,
+            k,
+            ports,
+            compliance,
+            f_prev: gravity.clone(),
+            gravity,
+            z0: vec![0.0; N_DOF],
+        })
     }
 }
 
@@ -118,9 +141,19 @@ impl<'m> Simulation<'m> {
         let cfg = &model.cfg;
         let st = &model.structure;
         let dt = cfg.solver.dt;
-        let contact_dofs: Vec<usize> = if model.cars.is_empty() { vec![] } else { (0..st.layers[0].n_dofs()).map(|k| st.layers[0].offset + k).collect() };
+        let contact_dofs: Vec<usize> = if model.cars.is_empty() {
+            vec![]
+        } else {
+            (0..st.layers[0].n_dofs())
+                .map(|k| st.layers[0].offset + k)
+                .collect()
+        };
         let mut track = Newmark::new(&st.m, &st.c, &st.k, dt, &contact_dofs)?;
-        let pmap = st.layers.iter().map(|l| (0..l.n_dofs()).map(|k| track.inv()[l.offset + k]).collect()).collect();
+        let pmap = st
+            .layers
+            .iter()
+            .map(|l| (0..l.n_dofs()).map(|k| track.inv()[l.offset + k]).collect())
+            .collect();
         for li in 0..st.layers.len() {
             for x in cfg.observation_points() {
                 track.observe(&st.shape(li, x));
@@ -129,14 +162,39 @@ impl<'m> Simulation<'m> {
         let movers = cfg
             .forces
             .iter()
-            .map(|f| Mover { layer: f.layer.as_ref().and_then(|l| cfg.layer_index(l)).unwrap_or(0), x0: f.x0, magnitude: f.magnitude })
+            .map(|f| Mover {
+                layer: f
+                    .layer
+                    .as_ref()
+                    .and_then(|l| cfg.layer_index(l))
+                    .unwrap_or(0),
+                x0: f.x0,
+                magnitude: f.magnitude,
+            })
             .collect();
-        let cars = model.cars.iter().map(|c| CarRun::new(c, dt, cfg.solver.gravity)).collect::<Result<Vec<_>>>()?;
+        let cars = model
+            .cars
+            .iter()
+            .map(|c| CarRun::new(c, dt, cfg.solver.gravity))
+            .collect::<Result<Vec<_>>>()?;
         let nw = cars.len() * N_WHEELS;
-        let g: Vec<f64> = cars.iter().flat_map(|c| [c.car.hertz_g; N_WHEELS]).collect();
-        let contact = ContactSolver::new(g, vec![1.0; nw], cfg.solver.contact_tol, cfg.solver.contact_max_iter);
+        let g: Vec<f64> = cars
+            .iter()
+            .flat_map(|c| [c.car.hertz_g; N_WHEELS])
+            .collect();
+        let contact = ContactSolver::new(
+            g,
+            vec![1.0; nw],
+            cfg.solver.contact_tol,
+            cfg.solver.contact_max_iter,
+        );
         let n = st.n_dofs;
-        let shape_len = st.layers.iter().map(|l| l.basis.shape_len()).max().unwrap_or(0);
+        let shape_len = st
+            .layers
+            .iter()
+            .map(|l| l.basis.shape_len())
+            .max()
+            .unwrap_or(0);
         Ok(Self {
             model,
             pmap,
@@ -147,14 +205,25 @@ impl<'m> Simulation<'m> {
             cars,
             contact,
             p: vec![0.0; nw],
-            shape: Shape { start: 0, values: vec![0.0; shape_len] },
+            shape: Shape {
+                start: 0,
+                values: vec![0.0; shape_len],
+            },
             n_steps: cfg.n_steps(),
             track,
         })
     }
 
     /// Adds w·N_layer(x) to the permuted force vector `f`.
-    fn scatter(model: &Model, pmap: &[Vec<usize>], shape: &mut Shape, f: &mut [f64], layer: usize, x: f64, w: f64) {
+    fn scatter(
+        model: &Model,
+        pmap: &[Vec<usize>],
+        shape: &mut Shape,
+        f: &mut [f64],
+        layer: usize,
+        x: f64,
+        w: f64,
+    ) {
         model.structure.layers[layer].basis.eval(x, shape);
         let map = &pmap[layer];
         for (k, v) in shape.values.iter().enumerate() {
@@ -175,23 +244,45 @@ impl<'m> Simulation<'m> {
             loads.extend(r.iter().map(|ri| ri / c.car.rails));
         }
         if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
-            return Err(VtbError::config(format!("vehicles[{}]", i / N_WHEELS), l, format!("wheelset {} carries no static load", i % N_WHEELS + 1)));
+            return Err(VtbError::config(
+                format!("vehicles[{}]", i / N_WHEELS),
+                l,
+                format!("wheelset {} carries no static load", i % N_WHEELS + 1),
+            ));
         }
         self.contact.p_ref.clone_from(&loads);
         self.p.clone_from(&loads);
         self.f_prev.fill(0.0);
         for m in &self.movers {
-            Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_prev, m.layer, m.x0, m.magnitude);
+            Self::scatter(
+                model,
+                &self.pmap,
+                &mut self.shape,
+                &mut self.f_prev,
+                m.layer,
+                m.x0,
+                m.magnitude,
+            );
         }
         for (ci, c) in self.cars.iter().enumerate() {
             for w in 0..N_WHEELS {
-                Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_prev, 0, c.car.wheel_x0[w], loads[ci * N_WHEELS + w]);
+                Self::scatter(
+                    model,
+                    &self.pmap,
+                    &mut self.shape,
+                    &mut self.f_prev,
+                    0,
+                    c.car.wheel_x0[w],
+                    loads[ci * N_WHEELS + w],
+                );
             }
         }
         let n = st.n_dofs;
         let f0 = self.track.to_original(&self.f_prev);
         let u0 = match cfg.solver.initial_state {
-            InitialState::Static => Ldlt::new(&st.k).map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?.solve(&f0),
+            InitialState::Static => Ldlt::new(&st.k)
+                .map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?
+                .solve(&f0),
             InitialState::Rest => vec![0.0; n],
         };
         let a0 = accelerations(&st.m, &st.k, &u0, &f0)?;
@@ -201,7 +292,9 @@ impl<'m> Simulation<'m> {
             for w in 0..N_WHEELS {
                 let x = c.car.wheel_x0[w];
                 let p0 = loads[ci * N_WHEELS + w];
-                zw[w] = st.displacement(0, x, &u0) + model.profile.at(x) + compression(c.car.hertz_g, p0);
+                zw[w] = st.displacement(0, x, &u0)
+                    + model.profile.at(x)
+                    + compression(c.car.hertz_g, p0);
             }
             let (_, z) = c.car.static_state(g, &zw);
             let mut f = c.car.gravity(g);
@@ -240,14 +333,24 @@ impl<'m> Simulation<'m> {
             let t1 = (step + 1) as f64 * dt;
             self.f_next.fill(0.0);
             for m in &self.movers {
-                Self::scatter(model, &self.pmap, &mut self.shape, &mut self.f_next, m.layer, m.x0 + v * t1, m.magnitude);
+                Self::scatter(
+                    model,
+                    &self.pmap,
+                    &mut self.shape,
+                    &mut self.f_next,
+                    m.layer,
+                    m.x0 + v * t1,
+                    m.magnitude,
+                );
             }
             self.track.begin_step(&self.f_prev, &self.f_next);
             for (ci, c) in self.cars.iter_mut().enumerate() {
                 let ports = &mut self.track_ports[ci];
                 ports.clear();
                 for w in 0..N_WHEELS {
-                    st.layers[0].basis.eval(c.car.wheel_x0[w] + v * t1, &mut self.shape);
+                    st.layers[0]
+                        .basis
+                        .eval(c.car.wheel_x0[w] + v * t1, &mut self.shape);
                     ports.set_shape(w, &self.shape, &self.pmap[0]);
                 }
                 self.track.forward_ports(ports);
@@ -264,20 +367,33 @@ impl<'m> Simulation<'m> {
                     delta_free[wi] = wheel[w] - rail[w] - model.profile.at(x);
                 }
                 for cj in 0..ncars {
-                    let g = self.track.port_compliance(&self.track_ports[ci], &self.track_ports[cj]);
+                    let g = self
+                        .track
+                        .port_compliance(&self.track_ports[ci], &self.track_ports[cj]);
                     for r in 0..N_WHEELS {
                         for s in 0..N_WHEELS {
-                            let own = if ci == cj { c.car.rails * c.compliance[r][s] } else { 0.0 };
+                            let own = if ci == cj {
+                                c.car.rails * c.compliance[r][s]
+                            } else {
+                                0.0
+                            };
                             amat[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = g[r][s] + own;
                         }
                     }
                 }
             }
             if nw > 0 {
-                self.contact.solve(&mut self.p, &delta_free, &amat, t1, step + 1)?;
+                self.contact
+                    .solve(&mut self.p, &delta_free, &amat, t1, step + 1)?;
             }
             for (ci, c) in self.cars.iter_mut().enumerate() {
-                let p: [f64; GW] = std::array::from_fn(|w| if w < N_WHEELS { self.p[ci * N_WHEELS + w] } else { 0.0 });
+                let p: [f64; GW] = std::array::from_fn(|w| {
+                    if w < N_WHEELS {
+                        self.p[ci * N_WHEELS + w]
+                    } else {
+                        0.0
+                    }
+                });
                 self.track.add_port_forces(&self.track_ports[ci], p);
                 c.nm.add_port_forces(&c.ports, p.map(|pw| -c.car.rails * pw));
                 c.nm.end_step();
@@ -302,7 +418,11 @@ impl<'m> Simulation<'m> {
                 match (self.p[wi] == 0.0, loss_open[wi]) {
                     (true, None) => loss_open[wi] = Some(t1),
                     (false, Some(t0)) => {
-                        res.contact_loss.push(ContactLoss { wheel: wi, t_start: t0, t_end: Some(t1) });
+                        res.contact_loss.push(ContactLoss {
+                            wheel: wi,
+                            t_start: t0,
+                            t_end: Some(t1),
+                        });
                         loss_open[wi] = None;
                     }
                     _ => {}
@@ -312,7 +432,11 @@ impl<'m> Simulation<'m> {
         }
         for (wi, open) in loss_open.iter().enumerate() {
             if let Some(t0) = open {
-                res.contact_loss.push(ContactLoss { wheel: wi, t_start: *t0, t_end: None });
+                res.contact_loss.push(ContactLoss {
+                    wheel: wi,
+                    t_start: *t0,
+                    t_end: None,
+                });
             }
         }
         Ok(res)

@@ -9,10 +9,10 @@
 
 use crate::error::{Result, VtbError};
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
-use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
@@ -28,7 +28,10 @@ pub struct Assembler {
 
 impl Assembler {
     pub fn new(n: usize) -> Self {
-        Self { n, entries: Vec::new() }
+        Self {
+            n,
+            entries: Vec::new(),
+        }
     }
 
     pub fn dim(&self) -> usize {
@@ -101,7 +104,12 @@ impl Assembler {
             }
             row_ptr[i + 1] = col_idx.len();
         }
-        CsrMatrix { n, row_ptr, col_idx, values }
+        CsrMatrix {
+            n,
+            row_ptr,
+            col_idx,
+            values,
+        }
     }
 }
 
@@ -117,7 +125,12 @@ pub struct CsrMatrix {
 
 impl CsrMatrix {
     pub fn zeros(n: usize) -> Self {
-        Self { n, row_ptr: vec![0; n + 1], col_idx: Vec::new(), values: Vec::new() }
+        Self {
+            n,
+            row_ptr: vec![0; n + 1],
+            col_idx: Vec::new(),
+            values: Vec::new(),
+        }
     }
 
     pub fn nnz(&self) -> usize {
@@ -142,7 +155,11 @@ impl CsrMatrix {
         for i in 0..self.n {
             for p in self.row_ptr[i]..self.row_ptr[i + 1] {
                 let (j, v) = (self.col_idx[p], self.values[p]);
-                let keep = if i == j { v != 0.0 } else { v.abs() > tol * (d[i] * d[j]).sqrt() };
+                let keep = if i == j {
+                    v != 0.0
+                } else {
+                    v.abs() > tol * (d[i] * d[j]).sqrt()
+                };
                 if keep {
                     out.col_idx.push(j);
                     out.values.push(v);
@@ -206,114 +223,203 @@ impl CsrMatrix {
     }
 }
 
-/// Two symmetric matrices A, B on one sparsity pattern, applied to the same vector in one
-/// pass. The few heavy rows (the boundary functions of a modal basis couple to every sine)
-/// are kept as dense segments over their column span: by symmetry the same segment serves
-/// as a contiguous dot product for the heavy row and as a contiguous axpy for the heavy
-/// column. The remaining light–light entries form a small CSR.
+/// A symmetric sparse matrix prepared for repeated products y = A·x: the diagonal as a
+/// vector, the light off-diagonal entries once each (i < j) as a coordinate list applied to
+/// both (i, j) and (j, i), and the few heavy rows (the boundary functions of a modal basis
+/// couple to every sine) as runs of their nonzeros, where one pass serves the heavy row (dot
+/// product) and, by symmetry, the heavy column (axpy). No per-row loops over short rows.
 #[derive(Clone, Debug)]
-pub struct PairOperator {
+pub struct SymOperator {
     n: usize,
-    row_ptr: Vec<u32>,
-    col_idx: Vec<u32>,
-    /// (a_ij, b_ij) of light–light entries.
-    values: Vec<[f64; 2]>,
-    heavy: Vec<HeavyLine>,
+    diag: Vec<f64>,
+    /// Light–light off-diagonal pairs (i, j) with i < j.
+    pairs: Vec<(u32, u32)>,
+    pair_vals: Vec<f64>,
+    /// Heavy rows: index, runs (first column, length, value offset).
+    heavy: Vec<(usize, Vec<(usize, usize, usize)>)>,
+    heavy_vals: Vec<f64>,
 }
 
-#[derive(Clone, Debug)]
-struct HeavyLine {
-    index: usize,
-    /// Column span start; `a`, `b` hold the entries of row `index` at columns span..span+len.
-    span: usize,
-    a: Vec<f64>,
-    b: Vec<f64>,
-}
-
-impl PairOperator {
-    pub fn new(a: &CsrMatrix, b: &CsrMatrix) -> Self {
-        let pattern = CsrMatrix::combine(&[(1.0, a), (1.0, b)]);
+impl SymOperator {
+    /// Builds the operator for P·A·Pᵀ, `perm[k]` being the original index of unknown k.
+    pub fn new(a: &CsrMatrix, perm: &[usize]) -> Self {
         let n = a.n;
-        let deg: Vec<usize> = (0..n).map(|i| pattern.row_ptr[i + 1] - pattern.row_ptr[i]).collect();
+        let mut inv = vec![0usize; n];
+        for (k, &i) in perm.iter().enumerate() {
+            inv[i] = k;
+        }
+        let deg: Vec<usize> = (0..n)
+            .map(|i| a.row_ptr[perm[i] + 1] - a.row_ptr[perm[i]])
+            .collect();
         let mean = deg.iter().sum::<usize>() as f64 / n.max(1) as f64;
-        let is_heavy: Vec<bool> = deg.iter().map(|&d| d as f64 > (4.0 * mean).max(48.0)).collect();
-        let mut heavy = Vec::new();
-        let (mut row_ptr, mut col_idx, mut values) = (vec![0u32; n + 1], Vec::new(), Vec::new());
-        for i in 0..n {
-            let r = pattern.row_ptr[i]..pattern.row_ptr[i + 1];
-            if is_heavy[i] {
-                let cols = &pattern.col_idx[r];
-                let (lo, hi) = (cols[0], *cols.last().unwrap());
-                heavy.push(HeavyLine {
-                    index: i,
-                    span: lo,
-                    a: (lo..=hi).map(|j| a.get(i, j)).collect(),
-                    b: (lo..=hi).map(|j| b.get(i, j)).collect(),
-                });
+        let is_heavy: Vec<bool> = deg
+            .iter()
+            .map(|&d| d as f64 > (4.0 * mean).max(48.0))
+            .collect();
+        let mut diag = vec![0.0; n];
+        let (mut pairs, mut pair_vals) = (Vec::new(), Vec::new());
+        let (mut heavy, mut heavy_vals) = (Vec::new(), Vec::new());
+        let mut row: Vec<(usize, f64)> = Vec::new();
+        for k in 0..n {
+            let i = perm[k];
+            row.clear();
+            row.extend((a.row_ptr[i]..a.row_ptr[i + 1]).map(|p| (inv[a.col_idx[p]], a.values[p])));
+            row.sort_unstable_by_key(|e| e.0);
+            if is_heavy[k] {
+                // A heavy row owns every entry of its row; light rows skip heavy columns.
+                let mut runs = Vec::new();
+                let mut q = 0;
+                while q < row.len() {
+                    let mut e = q + 1;
+                    while e < row.len() && row[e].0 == row[e - 1].0 + 1 {
+                        e += 1;
+                    }
+                    runs.push((row[q].0, e - q, heavy_vals.len()));
+                    heavy_vals.extend(row[q..e].iter().map(|x| x.1));
+                    q = e;
+                }
+                heavy.push((k, runs));
             } else {
-                let from = col_idx.len();
-                for p in r {
-                    let j = pattern.col_idx[p];
-                    if !is_heavy[j] {
-                        col_idx.push(j as u32);
-                        values.push([a.get(i, j), b.get(i, j)]);
-                    }
-                }
-                if let Some(&last) = col_idx[from..].last() {
-                    while (col_idx.len() - from) % 4 != 0 {
-                        col_idx.push(last);
-                        values.push([0.0, 0.0]);
+                for &(j, v) in &row {
+                    if j == k {
+                        diag[k] = v;
+                    } else if j > k && !is_heavy[j] {
+                        pairs.push((k as u32, j as u32));
+                        pair_vals.push(v);
                     }
                 }
             }
-            row_ptr[i + 1] = col_idx.len() as u32;
         }
-        Self { n, row_ptr, col_idx, values, heavy }
+        Self {
+            n,
+            diag,
+            pairs,
+            pair_vals,
+            heavy,
+            heavy_vals,
+        }
     }
 
+    /// Stored entries.
     pub fn nnz(&self) -> usize {
-        self.values.len() + self.heavy.iter().map(|h| 2 * h.a.len()).sum::<usize>()
+        self.diag.len() + 2 * self.pair_vals.len() + self.heavy_vals.len()
     }
 
-    /// ya = A·x, yb = B·x (all of length n).
-    pub fn mul(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
-        assert!(x.len() == self.n && ya.len() == self.n && yb.len() == self.n);
-        for i in 0..self.n {
-            let (r0, r1) = (self.row_ptr[i] as usize, self.row_ptr[i + 1] as usize);
-            let (mut sa, mut sb) = ([0.0; 4], [0.0; 4]);
-            let mut p = r0;
-            while p < r1 {
-                // SAFETY: rows hold whole chunks of 4 entries and column indices are < n.
-                unsafe {
-                    for q in 0..4 {
-                        let xj = *x.get_unchecked(*self.col_idx.get_unchecked(p + q) as usize);
-                        let v = self.values.get_unchecked(p + q);
-                        sa[q] += v[0] * xj;
-                        sb[q] += v[1] * xj;
-                    }
-                }
-                p += 4;
-            }
-            ya[i] = (sa[0] + sa[1]) + (sa[2] + sa[3]);
-            yb[i] = (sb[0] + sb[1]) + (sb[2] + sb[3]);
+    /// y = A·x.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        assert!(x.len() == self.n && y.len() == self.n);
+        for ((yv, d), xv) in y.iter_mut().zip(&self.diag).zip(x) {
+            *yv = d * xv;
         }
-        // Heavy columns (axpy), then heavy rows (dot) overwrite their own outputs.
-        for h in &self.heavy {
-            let xi = x[h.index];
-            let len = h.a.len();
-            for (y, v) in ya[h.span..h.span + len].iter_mut().zip(&h.a) {
-                *y += v * xi;
-            }
-            for (y, w) in yb[h.span..h.span + len].iter_mut().zip(&h.b) {
-                *y += w * xi;
+        for (&(i, j), &v) in self.pairs.iter().zip(&self.pair_vals) {
+            let (i, j) = (i as usize, j as usize);
+            // SAFETY: i, j < n by construction.
+            unsafe {
+                *y.get_unchecked_mut(i) += v * *x.get_unchecked(j);
+                *y.get_unchecked_mut(j) += v * *x.get_unchecked(i);
             }
         }
-        for h in &self.heavy {
-            let xs = &x[h.span..h.span + h.a.len()];
-            ya[h.index] = dot4(&h.a, xs);
-            yb[h.index] = dot4(&h.b, xs);
+        // Heavy rows: their column (axpy) and their row (dot). A heavy row's own output is
+        // set afterwards, discarding what the axpys of other heavy rows added there.
+        let mut own = [0.0; 64];
+        for (h, (i, runs)) in self.heavy.iter().enumerate() {
+            let xi = x[*i];
+            let mut d = 0.0;
+            for &(s, l, o) in runs {
+                d += axpy_dot(
+                    &mut y[s..s + l],
+                    &self.heavy_vals[o..o + l],
+                    &x[s..s + l],
+                    xi,
+                );
+            }
+            if h < own.len() {
+                own[h] = d;
+            }
+        }
+        for (h, (i, runs)) in self.heavy.iter().enumerate() {
+            y[*i] = if h < own.len() {
+                own[h]
+            } else {
+                runs.iter()
+                    .map(|&(s, l, o)| dot4(&self.heavy_vals[o..o + l], &x[s..s + l]))
+                    .sum()
+            };
         }
     }
+}
+
+/// y += a·v and returns a·x, in one pass over equal-length slices.
+#[inline(always)]
+fn axpy_dot(y: &mut [f64], a: &[f64], x: &[f64], v: f64) -> f64 {
+    let n = y.len();
+    let (a, x) = (&a[..n], &x[..n]);
+    let mut s = [0.0; 4];
+    let chunks = n / 4;
+    for c in 0..chunks {
+        for q in 0..4 {
+            let j = 4 * c + q;
+            y[j] += a[j] * v;
+            s[q] += a[j] * x[j];
+        }
+    }
+    for j in 4 * chunks..n {
+        y[j] += a[j] * v;
+        s[0] += a[j] * x[j];
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
+}
+
+/// Reorders `order` so that, after the heavy unknowns are removed, the disjoint components
+/// of the rest (per-mode chains of a modal basis) are laid out slot by slot: the first
+/// unknown of every component, then the second, …, with the `late` ones after all others.
+/// Each component keeps its internal order, so the fill of the factor is unchanged while the
+/// heavy rows of L become a few long runs.
+fn slot_major(a: &CsrMatrix, order: &[usize], heavy: &[bool], late: &[bool]) -> Vec<usize> {
+    let n = a.n;
+    let mut comp = vec![usize::MAX; n];
+    let mut ncomp = 0;
+    for s in 0..n {
+        if heavy[s] || comp[s] != usize::MAX {
+            continue;
+        }
+        let mut stack = vec![s];
+        comp[s] = ncomp;
+        while let Some(i) = stack.pop() {
+            for p in a.row_ptr[i]..a.row_ptr[i + 1] {
+                let j = a.col_idx[p];
+                if !heavy[j] && comp[j] == usize::MAX {
+                    comp[j] = ncomp;
+                    stack.push(j);
+                }
+            }
+        }
+        ncomp += 1;
+    }
+    let mut size = vec![0usize; ncomp];
+    for i in 0..n {
+        if !heavy[i] {
+            size[comp[i]] += 1;
+        }
+    }
+    let mut rank_in = vec![0usize; ncomp];
+    // Components of equal size share their offset pattern, so they are grouped.
+    let mut keyed: Vec<((bool, bool, usize, usize, usize), usize)> = order
+        .iter()
+        .map(|&i| {
+            if heavy[i] {
+                ((true, false, 0, 0, 0), i)
+            } else {
+                let c = comp[i];
+                let r = rank_in[c];
+                rank_in[c] += 1;
+                ((false, late[i], size[c], r, c), i)
+            }
+        })
+        .collect();
+    // Stable: heavy unknowns keep their relative order at the end.
+    keyed.sort_by_key(|e| e.0);
+    keyed.into_iter().map(|e| e.1).collect()
 }
 
 /// Σ a_i·b_i with four independent partial sums.
@@ -335,18 +441,40 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
 
 /// P·A·Pᵀ = L·D·Lᵀ of a symmetric positive definite matrix. Solves work in the permuted
 /// numbering on caller-provided buffers, several right-hand sides interleaved row by row.
+///
+/// L is stored in three parts suited to the structure of the time-stepping matrices:
+/// * interior rows by column (short columns: the per-mode chains of a modal basis);
+/// * *border rows* (the high-degree unknowns eliminated last) as runs of consecutive
+///   columns, applied as dot products in the forward and axpys in the backward substitution,
+///   which avoids long read–modify–write chains on the same entries;
+/// * the dense border–border triangle.
 #[derive(Clone, Debug)]
 pub struct Ldlt {
     pub n: usize,
     /// `perm[k]`: original index of the k-th eliminated unknown; `inv` its inverse.
     pub perm: Vec<usize>,
     pub inv: Vec<usize>,
-    /// Strictly lower part of unit L, by column (row indices < n, checked at construction).
+    /// Rows `p..n` are border rows.
+    p: usize,
+    /// Interior part of strictly lower L by column (rows < p; indices checked at
+    /// construction).
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     l: Vec<f64>,
+    /// Border rows over interior columns: row g owns runs `brow_ptr[g]..brow_ptr[g+1]`,
+    /// each (first column, length, value offset into `bval`).
+    brow_ptr: Vec<usize>,
+    brun: Vec<(usize, usize, usize)>,
+    bval: Vec<f64>,
+    /// Border–border part of L, dense lower triangle (nb × nb, row-major).
+    lbb: Vec<f64>,
     d_inv: Vec<f64>,
+    nnz: usize,
 }
+
+/// A row of L with more than this many entries (in a trailing block of such rows) is stored
+/// as a border row.
+const BORDER_ROW_MIN: usize = 32;
 
 impl Ldlt {
     /// Factorises with an approximate-minimum-degree ordering.
@@ -354,70 +482,73 @@ impl Ldlt {
         Self::with_ordering(a, None)
     }
 
-    /// Factorises with the cheapest of a few orderings for time stepping: AMD, and AMD with
-    /// the high-degree unknowns and then also `late` (the unknowns that contact forces act on)
-    /// moved to the end. The cost estimate counts a forward and a backward substitution of
-    /// one vector plus the forward substitution of vectors that start at the first `late`
-    /// unknown. The trailing dense block is then sorted by original index, which leaves
-    /// its fill unchanged and turns the entries there into long runs.
+    /// Factorises with the cheapest of a few orderings for time stepping: AMD; AMD with the
+    /// high-degree unknowns moved to the end; the same with `late` (the unknowns contact
+    /// forces act on) also moved late; and slot-major versions of these (see `slot_major`).
+    /// The cost estimate (`stepping_cost`) is deterministic, so the choice is reproducible.
     pub fn for_stepping(a: &CsrMatrix, late: &[usize]) -> Result<Self> {
         let n = a.n;
         let amd = Self::new(a)?;
         let degree: Vec<usize> = (0..n).map(|i| a.row_ptr[i + 1] - a.row_ptr[i]).collect();
-        let mean = degree.iter().sum::<usize>() as f64 / n.max(1) as f64;
-        let heavy: Vec<bool> = degree.iter().map(|&d| d as f64 > (4.0 * mean).max(32.0)).collect();
+        let mut sorted = degree.clone();
+        sorted.sort_unstable();
+        let median = sorted[n / 2];
         let mut is_late = vec![false; n];
         for &i in late {
             is_late[i] = true;
         }
         let moved = |keep_last: &dyn Fn(usize) -> bool| -> Vec<usize> {
-            let mut o: Vec<usize> = amd.perm.iter().copied().filter(|&i| !keep_last(i)).collect();
+            let mut o: Vec<usize> = amd
+                .perm
+                .iter()
+                .copied()
+                .filter(|&i| !keep_last(i))
+                .collect();
             o.extend(amd.perm.iter().copied().filter(|&i| keep_last(i)));
             o
         };
         let mut best = amd.clone();
         let mut best_cost = best.stepping_cost(late);
-        for cand in [moved(&|i| heavy[i]), moved(&|i| heavy[i] || is_late[i])] {
-            if let Ok(f) = Self::with_ordering(a, Some(&cand)) {
-                let c = f.stepping_cost(late);
-                if c < best_cost {
-                    best = f;
-                    best_cost = c;
-                }
-            }
-        }
-        // Sort the dense trailing block.
-        let p = best.dense_suffix(0.9);
-        if p + 1 < n {
-            let mut o = best.perm.clone();
-            o[p..].sort_unstable();
-            if let Ok(f) = Self::with_ordering(a, Some(&o)) {
-                if f.stepping_cost(late) <= best_cost {
-                    best = f;
+        // "Heavy" at two levels: only the very dense rows, or every row well above the median
+        // (e.g. girder sines coupled to each other by the piers).
+        for factor in [8, 2] {
+            let heavy: Vec<bool> = degree
+                .iter()
+                .map(|&d| d > (factor * median).max(32))
+                .collect();
+            for cand in [moved(&|i| heavy[i]), moved(&|i| heavy[i] || is_late[i])] {
+                for order in [cand.clone(), slot_major(a, &cand, &heavy, &is_late)] {
+                    if let Ok(f) = Self::with_ordering(a, Some(&order)) {
+                        let c = f.stepping_cost(late);
+                        if c < best_cost {
+                            best = f;
+                            best_cost = c;
+                        }
+                    }
                 }
             }
         }
         Ok(best)
     }
 
+    /// Estimated work of one step: a forward and a backward substitution of one vector plus
+    /// the forward substitution of four port vectors from the first `late` unknown on:
+    /// interior entries cost 2, interior columns 4, border runs 8 plus their entries.
     fn stepping_cost(&self, late: &[usize]) -> usize {
         let start = late.iter().map(|&i| self.inv[i]).min().unwrap_or(self.n);
-        2 * self.nnz_l() + 2 * self.nnz_l_from(start)
-    }
-
-    /// First column p such that every column k ≥ p of L holds at least `frac` of the
-    /// n − 1 − k entries it could hold.
-    fn dense_suffix(&self, frac: f64) -> usize {
-        let mut p = self.n;
-        while p > 0 {
-            let k = p - 1;
-            let cnt = (self.col_ptr[k + 1] - self.col_ptr[k]) as usize;
-            if (cnt as f64) < frac * (self.n - 1 - k) as f64 {
-                break;
-            }
-            p = k;
-        }
-        p
+        let seg_cost = |from: usize| -> usize {
+            2 * (self.l.len() - self.col_ptr[from.min(self.p)] as usize)
+                + 4 * (self.p - from.min(self.p))
+        };
+        let border: usize =
+            self.brun.iter().map(|&(_, l, _)| l + 8).sum::<usize>() + (self.n - self.p).pow(2) / 2;
+        let ports: usize = self
+            .brun
+            .iter()
+            .filter(|r| r.0 + r.1 > start)
+            .map(|&(s, l, _)| 8 + (s + l - s.max(start)))
+            .sum();
+        2 * (seg_cost(0) + border) + 4 * (seg_cost(start) + ports)
     }
 
     /// Factorises with a given elimination order (`order[k]` = original index eliminated
@@ -425,7 +556,21 @@ impl Ldlt {
     pub fn with_ordering(a: &CsrMatrix, order: Option<&[usize]>) -> Result<Self> {
         let n = a.n;
         if n == 0 {
-            return Ok(Self { n, perm: vec![], inv: vec![], col_ptr: vec![0], row_idx: vec![], l: vec![], d_inv: vec![] });
+            return Ok(Self {
+                n,
+                perm: vec![],
+                inv: vec![],
+                p: 0,
+                col_ptr: vec![0],
+                row_idx: vec![],
+                l: vec![],
+                brow_ptr: vec![0],
+                brun: vec![],
+                bval: vec![],
+                lbb: vec![],
+                d_inv: vec![],
+                nnz: 0,
+            });
         }
         // Lower triangle by columns = upper-right part of each CSR row (symmetry).
         let mut col_ptr = vec![0usize; n + 1];
@@ -463,9 +608,18 @@ impl Ldlt {
             .map_err(|e| VtbError::Solver(format!("symbolic factorisation failed: {e:?}")))?;
         let mut l_val = vec![0.0f64; symbolic.len_val()];
         let scratch = symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default());
-        let mut mem = MemBuffer::try_new(scratch).map_err(|_| VtbError::Solver("out of memory".into()))?;
+        let mut mem =
+            MemBuffer::try_new(scratch).map_err(|_| VtbError::Solver("out of memory".into()))?;
         symbolic
-            .factorize_numeric_ldlt(&mut l_val, a_lower, Side::Lower, Default::default(), Par::Seq, MemStack::new(&mut mem), Default::default())
+            .factorize_numeric_ldlt(
+                &mut l_val,
+                a_lower,
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
             .map_err(|e| VtbError::Solver(format!("LDLᵀ factorisation failed: {e:?}")))?;
         let (perm, inv) = match symbolic.perm() {
             Some(p) => {
@@ -475,12 +629,24 @@ impl Ldlt {
             None => ((0..n).collect(), (0..n).collect()),
         };
         let SymbolicCholeskyRaw::Simplicial(s) = symbolic.raw() else {
-            return Err(VtbError::Solver("expected a simplicial factorisation".into()));
+            return Err(VtbError::Solver(
+                "expected a simplicial factorisation".into(),
+            ));
         };
         let (lp, li) = (s.col_ptr(), s.row_idx());
-        let mut out_ptr = vec![0u32; n + 1];
-        let mut out_row = Vec::with_capacity(li.len());
-        let mut out_l = Vec::with_capacity(li.len());
+        // Border: the longest trailing block of rows that each have many entries.
+        let mut row_count = vec![0usize; n];
+        for &i in li {
+            row_count[i] += 1;
+        }
+        let mut pb = n;
+        while pb > 0 && row_count[pb - 1] > BORDER_ROW_MIN {
+            pb -= 1;
+        }
+        let nb = n - pb;
+        let mut brows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nb];
+        let mut lbb = vec![0.0; nb * nb];
+        let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); pb];
         let mut d_inv = vec![0.0; n];
         // Pivots are compared with the permuted diagonal of A to detect a numerically
         // singular (unsupported) system.
@@ -499,26 +665,61 @@ impl Ldlt {
                         )));
                     }
                     d_inv[j] = 1.0 / dj;
+                } else if i < pb {
+                    cols[j].push((i, l_val[p]));
+                } else if j < pb {
+                    brows[i - pb].push((j, l_val[p]));
                 } else {
-                    assert!(i > j && i < n, "L entries lie strictly below the diagonal");
-                    out_row.push(i as u32);
-                    out_l.push(l_val[p]);
+                    lbb[(i - pb) * nb + (j - pb)] = l_val[p];
                 }
             }
-            out_ptr[j + 1] = out_row.len() as u32;
         }
-        Ok(Self { n, perm, inv, col_ptr: out_ptr, row_idx: out_row, l: out_l, d_inv })
+        let mut col_ptr = vec![0u32; pb + 1];
+        let (mut row_idx, mut l) = (Vec::new(), Vec::new());
+        for (j, c) in cols.iter().enumerate() {
+            row_idx.extend(c.iter().map(|e| e.0 as u32));
+            l.extend(c.iter().map(|e| e.1));
+            col_ptr[j + 1] = row_idx.len() as u32;
+        }
+        let (mut brow_ptr, mut brun, mut bval) = (vec![0usize], Vec::new(), Vec::new());
+        for row in &brows {
+            let mut q = 0;
+            while q < row.len() {
+                let mut e = q + 1;
+                while e < row.len() && row[e].0 == row[e - 1].0 + 1 {
+                    e += 1;
+                }
+                brun.push((row[q].0, e - q, bval.len()));
+                bval.extend(row[q..e].iter().map(|x| x.1));
+                q = e;
+            }
+            brow_ptr.push(brun.len());
+        }
+        Ok(Self {
+            n,
+            perm,
+            inv,
+            p: pb,
+            col_ptr,
+            row_idx,
+            l,
+            brow_ptr,
+            brun,
+            bval,
+            lbb,
+            d_inv,
+            nnz: li.len() - n,
+        })
     }
 
     /// Number of off-diagonal entries of L.
     pub fn nnz_l(&self) -> usize {
-        self.l.len()
+        self.nnz
     }
 
-    /// Entries of L in columns `start..n` (the work of a forward substitution
-    /// of a vector whose first nonzero is at `start`).
-    pub fn nnz_l_from(&self, start: usize) -> usize {
-        self.nnz_l() - self.col_ptr[start.min(self.n)] as usize
+    /// Number of border rows and of border-row runs.
+    pub fn layout(&self) -> (usize, usize) {
+        (self.n - self.p, self.brun.len())
     }
 
     /// z ← L⁻¹·z for `W` interleaved right-hand sides, skipping columns before `start`
@@ -526,7 +727,7 @@ impl Ldlt {
     #[inline]
     pub fn forward<const W: usize>(&self, z: &mut [f64], start: usize) {
         assert_eq!(z.len(), W * self.n);
-        for k in start..self.n {
+        for k in start.min(self.p)..self.p {
             let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
             let mut zk = [0.0; W];
             zk.copy_from_slice(&z[k * W..k * W + W]);
@@ -542,6 +743,45 @@ impl Ldlt {
                 }
             }
         }
+        // Border rows as dot products over their runs, then the dense border triangle.
+        let (pb, nb) = (self.p, self.n - self.p);
+        for g in 0..nb {
+            let mut acc = [[0.0; W]; 2];
+            for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
+                if s + l <= start {
+                    continue;
+                }
+                let skip = start.saturating_sub(s);
+                let vals = &self.bval[o + skip..o + l];
+                let zs = &z[(s + skip) * W..(s + l) * W];
+                if W == 1 {
+                    acc[0][0] += dot4(vals, zs);
+                } else {
+                    // Two accumulator sets break the FMA latency chain.
+                    let (v2, z2) = (vals.chunks_exact(2), zs.chunks_exact(2 * W));
+                    let (vr, zr) = (v2.remainder(), z2.remainder());
+                    for (v, zc) in v2.zip(z2) {
+                        for c in 0..W {
+                            acc[0][c] += v[0] * zc[c];
+                            acc[1][c] += v[1] * zc[W + c];
+                        }
+                    }
+                    for (v, zc) in vr.iter().zip(zr.chunks_exact(W)) {
+                        for c in 0..W {
+                            acc[0][c] += v * zc[c];
+                        }
+                    }
+                }
+            }
+            for (h, v) in self.lbb[g * nb..g * nb + g].iter().enumerate() {
+                for c in 0..W {
+                    acc[0][c] += v * z[(pb + h) * W + c];
+                }
+            }
+            for c in 0..W {
+                z[(pb + g) * W + c] -= acc[0][c] + acc[1][c];
+            }
+        }
     }
 
     /// z ← D⁻¹·z then z ← L⁻ᵀ·z for one right-hand side (`z.len()` = n).
@@ -551,22 +791,41 @@ impl Ldlt {
         for (v, d) in z.iter_mut().zip(&self.d_inv) {
             *v *= d;
         }
-        for k in (0..self.n).rev() {
+        let (pb, nb) = (self.p, self.n - self.p);
+        for g in (0..nb).rev() {
+            let mut s = 0.0;
+            for h in g + 1..nb {
+                s += self.lbb[h * nb + g] * z[pb + h];
+            }
+            z[pb + g] -= s;
+        }
+        let (zi, zb) = z.split_at_mut(pb);
+        for (g, &v) in zb.iter().enumerate() {
+            for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
+                for (zv, lv) in zi[s..s + l].iter_mut().zip(&self.bval[o..o + l]) {
+                    *zv -= lv * v;
+                }
+            }
+        }
+        for k in (0..pb).rev() {
             let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
             let mut s = [0.0; 2];
             let mut p = a;
-            // SAFETY: as in `forward`.
+            // SAFETY: as in `forward`; interior row indices are < p = zi.len().
             unsafe {
                 while p + 1 < b {
-                    s[0] += *self.l.get_unchecked(p) * *z.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
-                    s[1] += *self.l.get_unchecked(p + 1) * *z.get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
+                    s[0] += *self.l.get_unchecked(p)
+                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                    s[1] += *self.l.get_unchecked(p + 1)
+                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
                     p += 2;
                 }
                 if p < b {
-                    s[0] += *self.l.get_unchecked(p) * *z.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                    s[0] += *self.l.get_unchecked(p)
+                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
                 }
             }
-            z[k] -= s[0] + s[1];
+            zi[k] -= s[0] + s[1];
         }
     }
 

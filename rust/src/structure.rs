@@ -26,7 +26,13 @@ impl Structure {
         let mut layers = Vec::with_capacity(s.layers.len());
         let mut offset = 0;
         for lc in &s.layers {
-            let layer = Layer::new(lc, s.length, method, cfg.discretisation.fem_elements, offset);
+            let layer = Layer::new(
+                lc,
+                s.length,
+                method,
+                cfg.discretisation.fem_elements,
+                offset,
+            );
             offset += layer.n_dofs();
             layers.push(layer);
         }
@@ -47,7 +53,11 @@ impl Structure {
         }
         for c in &s.couplings {
             let a = &layers[cfg.layer_index(&c.upper).expect("validated")];
-            let b = if c.lower == GROUND { None } else { Some(&layers[cfg.layer_index(&c.lower).expect("validated")]) };
+            let b = if c.lower == GROUND {
+                None
+            } else {
+                Some(&layers[cfg.layer_index(&c.lower).expect("validated")])
+            };
             for (asm, w) in [(&mut ak, c.stiffness), (&mut ac, c.damping)] {
                 match c.kind {
                     CouplingKind::Continuous => add_continuous(asm, a, b, w),
@@ -55,7 +65,14 @@ impl Structure {
                 }
             }
         }
-        Ok(Self { length: s.length, layers, n_dofs: n, m: am.finish(), k: ak.finish(), c: ac.finish() })
+        Ok(Self {
+            length: s.length,
+            layers,
+            n_dofs: n,
+            m: am.finish(),
+            k: ak.finish(),
+            c: ac.finish(),
+        })
     }
 
     /// Shape vector of layer `layer` at x (structure numbering), without allocating.
@@ -77,5 +94,9 @@ impl Structure {
 /// nᵀ·q for a shape vector n.
 #[inline]
 pub fn dot(n: &Shape, q: &[f64]) -> f64 {
-    n.values.iter().zip(&q[n.start..n.start + n.values.len()]).map(|(a, b)| a * b).sum()
+    n.values
+        .iter()
+        .zip(&q[n.start..n.start + n.values.len()])
+        .map(|(a, b)| a * b)
+        .sum()
 }

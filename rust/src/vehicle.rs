@@ -40,7 +40,9 @@ fn add_element(m: &mut Mat10, d: &[(usize, f64)], w: f64) {
 
 impl Car {
     pub fn new(v: &VehicleConfig) -> Self {
-        let mass = [v.m_c, v.j_c, v.m_t, v.j_t, v.m_t, v.j_t, v.m_w, v.m_w, v.m_w, v.m_w];
+        let mass = [
+            v.m_c, v.j_c, v.m_t, v.j_t, v.m_t, v.j_t, v.m_w, v.m_w, v.m_w, v.m_w,
+        ];
         let (mut k, mut c) = ([[0.0; N_DOF]; N_DOF], [[0.0; N_DOF]; N_DOF]);
         // Secondary: bogie i (DOF 2+2i) under the body point Z_c ∓ l_c·β_c.
         for (i, sign) in [(0, -1.0), (1, 1.0)] {
@@ -52,12 +54,23 @@ impl Car {
         for bogie in 0..2 {
             let (zt, bt) = (2 + 2 * bogie, 3 + 2 * bogie);
             for (j, sign) in [(0, -1.0), (1, 1.0)] {
-                let d = [(zt, 1.0), (bt, sign * v.l_t), (WHEEL0 + 2 * bogie + j, -1.0)];
+                let d = [
+                    (zt, 1.0),
+                    (bt, sign * v.l_t),
+                    (WHEEL0 + 2 * bogie + j, -1.0),
+                ];
                 add_element(&mut k, &d, v.k_p);
                 add_element(&mut c, &d, v.c_p);
             }
         }
-        Self { mass, k, c, hertz_g: v.hertz_constant(), wheel_x0: v.wheel_offsets(), rails: v.rails as f64 }
+        Self {
+            mass,
+            k,
+            c,
+            hertz_g: v.hertz_constant(),
+            wheel_x0: v.wheel_offsets(),
+            rails: v.rails as f64,
+        }
     }
 
     /// Gravity load vector m·g on the translational DOFs.
@@ -75,11 +88,19 @@ impl Car {
     /// wheel loads follow from statics alone: fix the wheelsets, solve the body and bogies,
     /// read the reactions. The body and bogies then follow the wheels as z_f =
     /// K_ff⁻¹(F_f − K_fw·z_w).
-    pub fn static_state(&self, g: f64, z_wheels: &[f64; N_WHEELS]) -> ([f64; N_WHEELS], [f64; N_DOF]) {
+    pub fn static_state(
+        &self,
+        g: f64,
+        z_wheels: &[f64; N_WHEELS],
+    ) -> ([f64; N_WHEELS], [f64; N_DOF]) {
         let f = self.gravity(g);
         let kff: Vec<Vec<f64>> = (0..WHEEL0).map(|i| self.k[i][..WHEEL0].to_vec()).collect();
         let mut rhs: Vec<f64> = (0..WHEEL0)
-            .map(|i| f[i] - (0..N_WHEELS).map(|w| self.k[i][WHEEL0 + w] * z_wheels[w]).sum::<f64>())
+            .map(|i| {
+                f[i] - (0..N_WHEELS)
+                    .map(|w| self.k[i][WHEEL0 + w] * z_wheels[w])
+                    .sum::<f64>()
+            })
             .collect();
         solve_dense(&kff, &mut rhs);
         let mut z = [0.0; N_DOF];
@@ -100,7 +121,9 @@ pub fn solve_dense(a: &[Vec<f64>], b: &mut [f64]) -> bool {
     let n = b.len();
     let mut m: Vec<Vec<f64>> = a.to_vec();
     for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs())).unwrap();
+        let piv = (col..n)
+            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
+            .unwrap();
         if m[piv][col] == 0.0 {
             return false;
         }
@@ -174,7 +197,9 @@ mod tests {
             }
         }
         // Generalised force −K·z must equal the right-hand sides of model.md §3.
-        let z = [1.0e-3, 2.0e-4, -3.0e-4, 1.0e-3, 5.0e-4, -2.0e-3, 1.0e-4, -1.0e-4, 2.0e-4, 0.0];
+        let z = [
+            1.0e-3, 2.0e-4, -3.0e-4, 1.0e-3, 5.0e-4, -2.0e-3, 1.0e-4, -1.0e-4, 2.0e-4, 0.0,
+        ];
         let fs1 = v.k_s * (z[0] - v.l_c * z[1] - z[2]);
         let fs2 = v.k_s * (z[0] + v.l_c * z[1] - z[4]);
         let fp = |zt: f64, bt: f64, zw: f64, s: f64| v.k_p * (zt + s * v.l_t * bt - zw);
@@ -194,7 +219,11 @@ mod tests {
         ];
         for i in 0..N_DOF {
             let got: f64 = -(0..N_DOF).map(|j| car.k[i][j] * z[j]).sum::<f64>();
-            assert!((got - want[i]).abs() < 1e-6 * want[i].abs().max(1.0), "dof {i}: {got} vs {}", want[i]);
+            assert!(
+                (got - want[i]).abs() < 1e-6 * want[i].abs().max(1.0),
+                "dof {i}: {got} vs {}",
+                want[i]
+            );
         }
     }
 
