@@ -1,1 +1,211 @@
+//! `vtb._core`: the Python binding of the vtb core. It converts configurations (JSON text
+//! produced by the Python dataclasses) and numpy arrays, maps core errors onto the exception
+//! classes of `vtb.errors`, and runs the work with the GIL released on a worker thread while
+//! the calling thread watches for Ctrl-C and reports progress.
 
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Duration;
+use vtb::{Config, Job, Profile, RunResult, VtbError};
+
+/// Raises the `vtb.errors` exception matching a core error.
+fn to_py_err(py: Python<'_>, e: VtbError) -> PyErr {
+    match make_exception(py, &e) {
+        Ok(obj) => PyErr::from_value(obj),
+        Err(err) => err,
+    }
+}
+
+/// The exception instance (not raised) for a core error.
+fn make_exception<'py>(py: Python<'py>, e: &VtbError) -> PyResult<Bound<'py, PyAny>> {
+    let errors = py.import("vtb.errors")?;
+    let msg = e.to_string();
+    match e {
+        VtbError::Config { field, value, reason } => errors.getattr("ConfigError")?.call1((msg, field.as_str(), value.as_str(), reason.as_str())),
+        VtbError::ContactNotConverged { time, step, residual, iterations } => {
+            errors.getattr("ConvergenceError")?.call1((msg, *time, *step, *residual, *iterations))
+        }
+        VtbError::Solver(_) => errors.getattr("SolverError")?.call1((msg,)),
+        VtbError::Cancelled => Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(msg).into_value(py).into_bound(py).into_any()),
+    }
+}
+
+/// Runs `work` on a worker thread with the GIL released. Every 50 ms the calling thread
+/// takes the GIL to process signals (Ctrl-C sets the cancel flag and re-raises) and to call
+/// `progress(done)` when the done-counter moved. A panic in the worker becomes a
+/// `SolverError` instead of crossing into Python.
+fn run_detached<T: Send>(
+    py: Python<'_>,
+    progress: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&AtomicBool, &AtomicUsize) -> T + Send,
+) -> PyResult<T> {
+    let cancel = AtomicBool::new(false);
+    let done = AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        let handle = s.spawn(|| work(&cancel, &done));
+        let mut reported = 0;
+        loop {
+            let finished = py.detach(|| {
+                for _ in 0..10 {
+                    if handle.is_finished() {
+                        return true;
+                    }
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                handle.is_finished()
+            });
+            if let Err(e) = py.check_signals() {
+                cancel.store(true, Ordering::Relaxed);
+                let _ = py.detach(|| handle.join());
+                return Err(e);
+            }
+            if let Some(cb) = progress {
+                let d = done.load(Ordering::Relaxed);
+                if d != reported {
+                    cb.call1((d,))?;
+                    reported = d;
+                }
+            }
+            if finished {
+                break;
+            }
+        }
+        let joined = py.detach(|| handle.join());
+        joined.map_err(|panic| {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown".into());
+            let errors = py.import("vtb.errors").and_then(|m| m.getattr("SolverError"));
+            match errors.and_then(|cls| cls.call1((format!("internal error: {what}"),))) {
+                Ok(obj) => PyErr::from_value(obj),
+                Err(e) => e,
+            }
+        })
+    })
+}
+
+fn parse_config(py: Python<'_>, json: &str) -> PyResult<Config> {
+    Config::from_json(json).map_err(|e| to_py_err(py, e))
+}
+
+fn make_profile(x0: f64, dx: f64, values: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Profile> {
+    Ok(match values {
+        None => Profile::flat(),
+        Some(v) => Profile { x0, dx, values: v.as_slice().map_err(|e| PyRuntimeError::new_err(e.to_string()))?.to_vec() },
+    })
+}
+
+fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let steps = r.n_steps + 1;
+    let (nl, np) = (r.layer_names.len(), r.points.len());
+    d.set_item("dt", r.dt)?;
+    d.set_item("n_steps", r.n_steps)?;
+    d.set_item("layer_names", r.layer_names.clone())?;
+    d.set_item("points", r.points.clone())?;
+    d.set_item("metrics", r.metrics())?;
+    d.set_item("disp", PyArray1::from_vec(py, r.disp).reshape([steps, nl, np])?)?;
+    d.set_item("acc", PyArray1::from_vec(py, r.acc).reshape([steps, nl, np])?)?;
+    d.set_item("vehicle_disp", PyArray1::from_vec(py, r.vehicle_disp).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?)?;
+    d.set_item("vehicle_acc", PyArray1::from_vec(py, r.vehicle_acc).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?)?;
+    d.set_item("contact_force", PyArray1::from_vec(py, r.contact_force).reshape([steps, r.n_wheels])?)?;
+    let losses = PyList::empty(py);
+    for l in &r.contact_loss {
+        losses.append((l.wheel, l.t_start, l.t_end))?;
+    }
+    d.set_item("contact_loss", losses)?;
+    Ok(d)
+}
+
+/// The JSON configuration of a named preset (`"paper"`).
+#[pyfunction]
+fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
+    vtb::presets::by_name(name)
+        .map(|c| c.to_json())
+        .ok_or_else(|| to_py_err(py, VtbError::config("preset", name, "unknown preset (known: \"paper\")")))
+}
+
+/// Validates a JSON configuration against an irregularity profile; raises on the first
+/// problem.
+#[pyfunction]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
+fn validate(py: Python<'_>, config_json: &str, profile_x0: f64, profile_dx: f64, profile: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
+    let cfg = parse_config(py, config_json)?;
+    let p = make_profile(profile_x0, profile_dx, profile)?;
+    cfg.validate(&p).map_err(|e| to_py_err(py, e))
+}
+
+/// Runs one configuration; returns a dict of histories and metrics.
+#[pyfunction]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
+fn simulate<'py>(py: Python<'py>, config_json: &str, profile_x0: f64, profile_dx: f64, profile: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let p = make_profile(profile_x0, profile_dx, profile)?;
+    let out = run_detached(py, None, |cancel, _| vtb::simulate(&cfg, &p, Some(cancel)))?;
+    let r = out.map_err(|e| to_py_err(py, e))?;
+    result_to_dict(py, r)
+}
+
+/// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0) and
+/// returns, in order, each run's metrics dict or its (unraised) exception. `profiles` are
+/// (x0, dx, values) triples shared by index through `profile_index`; `progress(done)` is
+/// called from the calling thread as runs finish.
+#[pyfunction]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None))]
+fn batch<'py>(
+    py: Python<'py>,
+    configs: Vec<String>,
+    profiles: Vec<(f64, f64, Option<PyReadonlyArray1<'_, f64>>)>,
+    profile_index: Vec<usize>,
+    threads: usize,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    if configs.len() != profile_index.len() {
+        return Err(to_py_err(py, VtbError::config("profile_index", profile_index.len(), format!("needs one entry per config ({})", configs.len()))));
+    }
+    let shared: Vec<Arc<Profile>> = profiles.into_iter().map(|(x0, dx, v)| make_profile(x0, dx, v).map(Arc::new)).collect::<PyResult<_>>()?;
+    let mut jobs = Vec::with_capacity(configs.len());
+    let mut parse_errors: Vec<Option<VtbError>> = Vec::with_capacity(configs.len());
+    for (i, (text, &pi)) in configs.iter().zip(&profile_index).enumerate() {
+        let profile = shared.get(pi).cloned().ok_or_else(|| to_py_err(py, VtbError::config(format!("profile_index[{i}]"), pi, format!("only {} profiles given", shared.len()))))?;
+        match Config::from_json(text) {
+            Ok(config) => {
+                jobs.push(Job { config, profile });
+                parse_errors.push(None);
+            }
+            Err(e) => parse_errors.push(Some(e)),
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let results = run_detached(py, progress.as_ref(), |cancel, done| pool.install(|| vtb::run_batch(&jobs, Some(cancel), Some(done))))?;
+    let out = PyList::empty(py);
+    let mut it = results.into_iter();
+    for pe in parse_errors {
+        let item = match pe {
+            Some(e) => make_exception(py, &e)?,
+            None => match it.next().expect("one result per parsed config") {
+                Ok(m) => m.into_pyobject(py)?.into_any(),
+                Err(VtbError::Cancelled) => return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled")),
+                Err(e) => make_exception(py, &e)?,
+            },
+        };
+        out.append(item)?;
+    }
+    Ok(out)
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(preset, m)?)?;
+    m.add_function(wrap_pyfunction!(validate, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(batch, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

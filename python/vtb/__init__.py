@@ -1,0 +1,40 @@
+"""vtb — vehicle–track–bridge vertical dynamics with a Rust core.
+
+Quick start::
+
+    import vtb
+    cfg = vtb.paper_config()          # the article's validation case
+    res = vtb.simulate(cfg)           # ~34 500 Newmark steps
+    print(res.metrics()["rail_acc_max"])
+
+See ``README.md`` for units and conventions and ``docs/`` for the model and its choices.
+"""
+
+from . import irregularity
+from ._core import __version__
+from .config import (
+    Config,
+    Coupling,
+    Discretisation,
+    Layer,
+    MovingForce,
+    Output,
+    RayleighCoefficients,
+    RayleighRatio,
+    Solver,
+    Structure,
+    TIDs,
+    Vehicle,
+)
+from .errors import ConfigError, ConvergenceError, SolverError, VtbError
+from .irregularity import Irregularity
+from .presets import crh3_car, moving_load_config, paper_config, paper_irregularity
+from .simulate import Result, irregularity_profile, simulate, simulate_batch
+
+__all__ = [
+    "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
+    "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "irregularity",
+    "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
+    "simulate_batch", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car",
+    "moving_load_config", "__version__",
+]

@@ -1,0 +1,331 @@
+"""Track irregularities: power spectral densities, random profiles and deterministic shapes.
+
+Conventions
+-----------
+* r(x) is the deviation of the rail top from its ideal line in metres, **positive downward (a
+  dip)**.
+* Every PSD function here returns the **one-sided** density ``S(f)`` in **m²/(1/m) = m³** of
+  the spatial frequency ``f`` in **cycles/m** (1/m, wavelength λ = 1/f), so that the variance is
+  ∫ S(f) df. Spectra published per angular wavenumber Ω = 2πf (rad/m) are converted with
+  S_f(f) = 2π·S_Ω(2πf); spectra published in mm² or cm² are converted to m².
+
+Families (``physics-data.md`` §3):
+
+``tbt3352``     TB/T 3352-2014 ballastless-track vertical profile, S = A/fⁿ in mm²/(1/m),
+                four segments; its last segment is extrapolated to short wavelengths (the
+                standard covers 2–120 m; vtb's paper preset uses it for 0.01–1 m, as the
+                article's "standard Chinese spectrum" suggests).
+``sato``        Sato (RTRI 1977) wheel–rail roughness S(Ω) = A/Ω³ in m²/(rad/m), Ω in rad/m
+                (A = 4.15e−8 … 5e−7; default 4.15e−8).
+``iso3095``     ISO 3095:2013 / EN 15610 rail-roughness limit, from 1/3-octave band levels
+                L = 10·lg(r²/r₀²), r₀ = 1 µm, λ = 0.315–40 cm: S(f_c) = r₀²·10^(L/10)/Δf with
+                Δf = 0.2308·f_c; log–log interpolation between band centres and extrapolation
+                with the end slopes outside the table.
+``german_low``, ``german_high``   German high-speed spectra (vertical), S(Ω) = A_v·Ω_c² /
+                ((Ω² + Ω_r²)(Ω² + Ω_c²)) in m²/(rad/m), taken as one-sided.
+``fra1`` … ``fra6``   US FRA track classes (vertical), S(Ω) = k·A_v·Ω_c²/(Ω²(Ω² + Ω_c²)) in
+                cm²/(rad/m), k = 0.25, taken as one-sided.
+
+Generation from a seed (:class:`numpy.random.Generator`), restricted to the wavelength band
+[``wavelength_min``, ``wavelength_max``]:
+
+``ifft``        inverse FFT with deterministic amplitudes |X_k| = N·sqrt(S(f_k)·Δf/2) and random
+                phases (Chen & Zhai 1999): the sample variance equals Σ S(f_k)·Δf exactly.
+``spectral``    spectral representation (Shinozuka & Jan 1972): Σ sqrt(2·S(f_k)·Δf)·cos(2πf_k·x
+                + φ_k) with jittered frequencies f_k = f_min + (k − ½ + u_k)Δf.
+
+Deterministic shapes: ``cosine_dip`` (a single (depth/2)(1 − cos) dip of given length),
+``corrugation`` ((amplitude/2)(1 − cos(2πx/λ)) over an interval) and ``sampled`` (a profile
+given by the user). ``none`` is a perfectly smooth rail.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+
+from .errors import config_error
+
+# --------------------------------------------------------------------------------------------
+# PSD families: one-sided S(f) in m³ for f in 1/m
+# --------------------------------------------------------------------------------------------
+
+#: TB/T 3352-2014 vertical profile: (A, n) per segment and break frequencies (1/m);
+#: S in mm²/(1/m).
+TBT3352_VERTICAL = ((1.0544e-5, 3.3891), (3.5588e-3, 1.9271), (1.9784e-2, 1.3643), (3.9488e-4, 3.4516))
+TBT3352_BREAKS = (0.0187, 0.0474, 0.1533)
+
+
+def psd_tbt3352(f: np.ndarray) -> np.ndarray:
+    """TB/T 3352 vertical profile, one-sided, m³ (f in 1/m)."""
+    f = np.asarray(f, dtype=float)
+    seg = np.searchsorted(np.asarray(TBT3352_BREAKS), f, side="right")
+    a = np.array([c[0] for c in TBT3352_VERTICAL])[seg]
+    n = np.array([c[1] for c in TBT3352_VERTICAL])[seg]
+    return a / f**n * 1e-6
+
+
+def psd_sato(f: np.ndarray, a: float = 4.15e-8) -> np.ndarray:
+    """Sato: S(Ω) = A/Ω³ (m²/(rad/m)) → S_f = A/(4π²f³), one-sided, m³."""
+    f = np.asarray(f, dtype=float)
+    return a / (4.0 * math.pi**2 * f**3)
+
+
+#: ISO 3095 / EN 15610 limit: wavelength (cm) and 1/3-octave band level (dB re 1 µm).
+ISO3095_LIMIT = (
+    (40, 17.1), (31.5, 15.0), (25, 13.0), (20, 11.0), (16, 9.0), (12.5, 7.0), (10, 4.9), (8, 2.9),
+    (6.3, 0.9), (5, -1.1), (4, -3.2), (3.15, -5.0), (2.5, -5.6), (2, -6.2), (1.6, -6.8), (1.25, -7.4),
+    (1, -8.0), (0.8, -8.6), (0.63, -9.2), (0.5, -9.8), (0.4, -10.4), (0.315, -11.0),
+)
+
+
+def psd_iso3095(f: np.ndarray) -> np.ndarray:
+    """ISO 3095 rail-roughness limit as a one-sided PSD (m³), log–log interpolated."""
+    f = np.asarray(f, dtype=float)
+    fc = np.array([100.0 / lam for lam, _ in ISO3095_LIMIT])
+    s = np.array([1e-12 * 10 ** (lev / 10.0) / (0.2308 * c) for c, (_, lev) in zip(fc, ISO3095_LIMIT)])
+    lf, ls = np.log(fc), np.log(s)
+    x = np.log(f)
+    out = np.interp(x, lf, ls)
+    lo, hi = x < lf[0], x > lf[-1]
+    out[lo] = ls[0] + (x[lo] - lf[0]) * (ls[1] - ls[0]) / (lf[1] - lf[0])
+    out[hi] = ls[-1] + (x[hi] - lf[-1]) * (ls[-1] - ls[-2]) / (lf[-1] - lf[-2])
+    return np.exp(out)
+
+
+GERMAN = {"low": 4.032e-7, "high": 10.80e-7}
+GERMAN_OMEGA_C, GERMAN_OMEGA_R = 0.8246, 0.0206
+
+
+def psd_german(f: np.ndarray, level: str = "low") -> np.ndarray:
+    """German high-speed vertical spectrum (low/high interference), one-sided, m³."""
+    w = 2.0 * math.pi * np.asarray(f, dtype=float)
+    av = GERMAN[level]
+    s_omega = av * GERMAN_OMEGA_C**2 / ((w**2 + GERMAN_OMEGA_R**2) * (w**2 + GERMAN_OMEGA_C**2))
+    return 2.0 * math.pi * s_omega
+
+
+#: FRA vertical A_v (cm²·rad/m) for classes 1..6; Ω_c (rad/m), k.
+FRA_AV = (1.2107, 1.0181, 0.6816, 0.5376, 0.2095, 0.0339)
+FRA_OMEGA_C, FRA_K = 0.8245, 0.25
+
+
+def psd_fra(f: np.ndarray, track_class: int = 6) -> np.ndarray:
+    """US FRA vertical profile of a track class (1–6), one-sided, m³."""
+    w = 2.0 * math.pi * np.asarray(f, dtype=float)
+    av = FRA_AV[track_class - 1]
+    s_omega_cm2 = FRA_K * av * FRA_OMEGA_C**2 / (w**2 * (w**2 + FRA_OMEGA_C**2))
+    return 2.0 * math.pi * s_omega_cm2 * 1e-4
+
+
+def psd(kind: str, **params) -> Callable[[np.ndarray], np.ndarray]:
+    """The one-sided PSD function S(f) (m³, f in 1/m) of a family name."""
+    if kind == "tbt3352":
+        return psd_tbt3352
+    if kind == "sato":
+        a = params.get("sato_a", 4.15e-8)
+        return lambda f: psd_sato(f, a)
+    if kind == "iso3095":
+        return psd_iso3095
+    if kind in ("german_low", "german_high"):
+        return lambda f: psd_german(f, kind.split("_")[1])
+    if kind.startswith("fra") and kind[3:].isdigit() and 1 <= int(kind[3:]) <= 6:
+        c = int(kind[3:])
+        return lambda f: psd_fra(f, c)
+    raise config_error("irregularity.kind", kind, f"unknown spectrum (known: {', '.join(SPECTRA)})")
+
+
+SPECTRA = ("tbt3352", "sato", "iso3095", "german_low", "german_high", "fra1", "fra2", "fra3", "fra4", "fra5", "fra6")
+SHAPES = ("none", "cosine_dip", "corrugation", "sampled")
+
+
+def band_variance(kind: str, wavelength_min: float, wavelength_max: float, **params) -> float:
+    """∫ S(f) df over the band (m²), by Gauss–Legendre in log f (exact to round-off for the
+    smooth power-law families)."""
+    s = psd(kind, **params)
+    lo, hi = math.log(1.0 / wavelength_max), math.log(1.0 / wavelength_min)
+    x, w = np.polynomial.legendre.leggauss(200)
+    u = 0.5 * (hi - lo) * (x + 1.0) + lo
+    f = np.exp(u)
+    return float(np.sum(w * s(f) * f) * 0.5 * (hi - lo))
+
+
+# --------------------------------------------------------------------------------------------
+# Random generation
+# --------------------------------------------------------------------------------------------
+
+
+def generate_ifft(s: Callable[[np.ndarray], np.ndarray], n: int, dx: float, f_min: float, f_max: float, rng: np.random.Generator) -> np.ndarray:
+    """n samples (spacing dx) with one-sided PSD s restricted to [f_min, f_max]: inverse FFT with
+    deterministic amplitudes N·sqrt(S·Δf/2) and uniform random phases."""
+    df = 1.0 / (n * dx)
+    k = np.arange(n // 2 + 1)
+    f = k * df
+    band = (f >= f_min) & (f <= f_max) & (k > 0) & (k < (n + 1) // 2)
+    amp = np.zeros(n // 2 + 1)
+    amp[band] = n * np.sqrt(s(f[band]) * df / 2.0)
+    phase = rng.uniform(0.0, 2.0 * math.pi, n // 2 + 1)
+    return np.fft.irfft(amp * np.exp(1j * phase), n=n)
+
+
+def generate_spectral(s: Callable[[np.ndarray], np.ndarray], x: np.ndarray, f_min: float, f_max: float, n_freq: int, rng: np.random.Generator) -> np.ndarray:
+    """Spectral representation Σ sqrt(2·S(f_k)·Δf)·cos(2πf_k·x + φ_k), jittered f_k."""
+    df = (f_max - f_min) / n_freq
+    fk = f_min + (np.arange(n_freq) + rng.uniform(0.0, 1.0, n_freq)) * df
+    amp = np.sqrt(2.0 * s(fk) * df)
+    phase = rng.uniform(0.0, 2.0 * math.pi, n_freq)
+    out = np.zeros_like(x)
+    for i in range(0, n_freq, 256):  # bounded memory
+        sl = slice(i, i + 256)
+        out += (amp[sl, None] * np.cos(2.0 * math.pi * fk[sl, None] * x[None, :] + phase[sl, None])).sum(axis=0)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# The configuration object
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Irregularity:
+    """Irregularity of the rail top, r(x) (m, dip positive).
+
+    ``kind``: a spectrum (``tbt3352``, ``sato``, ``iso3095``, ``german_low``, ``german_high``,
+    ``fra1``…``fra6``) or a shape (``none``, ``cosine_dip``, ``corrugation``, ``sampled``).
+
+    Random profiles use the band [``wavelength_min``, ``wavelength_max``] (m), ``method``
+    (``"ifft"`` or ``"spectral"``), ``seed`` and ``n_freq`` (spectral method), sampled every
+    ``dx`` m (default λ_min/10); ``scale`` multiplies the result (for calibration);
+    ``sato_a`` is Sato's A.
+
+    Shapes: ``cosine_dip`` uses ``depth``, ``length`` and ``position`` (start of the dip);
+    ``corrugation`` uses ``amplitude`` (peak to peak), ``wavelength`` and ``start``/``end``;
+    ``sampled`` uses ``x0``, ``dx`` and ``values`` (uniform grid, m).
+    """
+
+    kind: str = "none"
+    wavelength_min: float = 0.01
+    wavelength_max: float = 1.0
+    method: str = "ifft"
+    seed: int = 0
+    dx: Optional[float] = None
+    scale: float = 1.0
+    n_freq: int = 2000
+    sato_a: float = 4.15e-8
+    depth: float = 0.0
+    length: float = 0.0
+    position: float = 0.0
+    amplitude: float = 0.0
+    wavelength: float = 0.0
+    start: float = 0.0
+    end: float = 0.0
+    x0: float = 0.0
+    values: list = field(default_factory=list)
+
+    def validate(self, speed: Optional[float] = None, dt: Optional[float] = None) -> None:
+        """Raises :class:`~vtb.errors.ConfigError` for an unusable setting. With ``speed`` and
+        ``dt``, also rejects wavelengths the time step cannot resolve: the shortest wavelength
+        must be at least 2·v·Δt (the Nyquist limit of the excitation f = v/λ)."""
+        p = "irregularity"
+
+        def finite(name, v, positive=False):
+            if not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
+                raise config_error(f"{p}.{name}", v, "must be a finite number" + (" > 0" if positive else ""))
+
+        if self.kind not in SPECTRA + SHAPES:
+            raise config_error(f"{p}.kind", self.kind, f"unknown kind (known: {', '.join(SPECTRA + SHAPES)})")
+        finite("scale", self.scale)
+        if self.scale < 0:
+            raise config_error(f"{p}.scale", self.scale, "must be >= 0")
+        if self.dx is not None:
+            finite("dx", self.dx, positive=True)
+        if self.kind in SPECTRA:
+            finite("wavelength_min", self.wavelength_min, True)
+            finite("wavelength_max", self.wavelength_max, True)
+            if self.wavelength_max <= self.wavelength_min:
+                raise config_error(f"{p}.wavelength_max", self.wavelength_max, f"must exceed wavelength_min = {self.wavelength_min}")
+            if self.method not in ("ifft", "spectral"):
+                raise config_error(f"{p}.method", self.method, "must be \"ifft\" or \"spectral\"")
+            if not isinstance(self.seed, (int, np.integer)) or isinstance(self.seed, bool):
+                raise config_error(f"{p}.seed", self.seed, "must be an integer")
+            if self.method == "spectral" and (not isinstance(self.n_freq, int) or self.n_freq < 1):
+                raise config_error(f"{p}.n_freq", self.n_freq, "must be a positive integer")
+            if self.kind == "sato":
+                finite("sato_a", self.sato_a, True)
+            dx = self.sample_spacing()
+            if dx > self.wavelength_min / 4.0:
+                raise config_error(f"{p}.dx", dx, f"must be at most wavelength_min/4 = {self.wavelength_min / 4} to represent the shortest wavelength")
+            if speed is not None and dt is not None and speed > 0 and self.wavelength_min < 2.0 * speed * dt * (1 - 1e-12):
+                raise config_error(
+                    f"{p}.wavelength_min",
+                    self.wavelength_min,
+                    f"shorter than 2·v·Δt = {2 * speed * dt:.4g} m: the excitation frequency v/λ would exceed the Nyquist frequency of the time step",
+                )
+        elif self.kind == "cosine_dip":
+            finite("depth", self.depth)
+            finite("length", self.length, True)
+            finite("position", self.position)
+        elif self.kind == "corrugation":
+            finite("amplitude", self.amplitude)
+            finite("wavelength", self.wavelength, True)
+            finite("start", self.start)
+            finite("end", self.end)
+            if self.end <= self.start:
+                raise config_error(f"{p}.end", self.end, f"must exceed start = {self.start}")
+            if speed is not None and dt is not None and speed > 0 and self.wavelength < 2.0 * speed * dt:
+                raise config_error(f"{p}.wavelength", self.wavelength, f"shorter than 2·v·Δt = {2 * speed * dt:.4g} m (Nyquist)")
+        elif self.kind == "sampled":
+            finite("x0", self.x0)
+            if self.dx is None:
+                raise config_error(f"{p}.dx", None, "a sampled profile needs its spacing dx")
+            v = np.asarray(self.values, dtype=float)
+            if v.ndim != 1 or v.size < 2:
+                raise config_error(f"{p}.values", f"array of shape {v.shape}", "needs a 1-D array of at least 2 samples")
+            bad = np.flatnonzero(~np.isfinite(v))
+            if bad.size:
+                raise config_error(f"{p}.values[{bad[0]}]", float(v[bad[0]]), "must be finite")
+
+    def sample_spacing(self) -> float:
+        if self.dx is not None:
+            return float(self.dx)
+        if self.kind in SPECTRA:
+            return self.wavelength_min / 10.0
+        if self.kind == "corrugation":
+            return self.wavelength / 20.0
+        if self.kind == "cosine_dip":
+            return self.length / 50.0
+        return 1.0
+
+    def profile(self, x_min: float, x_max: float) -> tuple[float, float, np.ndarray]:
+        """Samples r(x) (m) on [x_min, x_max]: returns (x0, dx, values)."""
+        if self.kind == "none":
+            return 0.0, 1.0, np.zeros(0)
+        if self.kind == "sampled":
+            return float(self.x0), float(self.dx), np.asarray(self.values, dtype=float) * self.scale
+        dx = self.sample_spacing()
+        n = int(math.ceil((x_max - x_min) / dx)) + 1
+        x = x_min + dx * np.arange(n)
+        if self.kind in SPECTRA:
+            s = psd(self.kind, sato_a=self.sato_a)
+            rng = np.random.default_rng(self.seed)
+            f_min, f_max = 1.0 / self.wavelength_max, 1.0 / self.wavelength_min
+            if self.method == "ifft":
+                r = generate_ifft(s, n, dx, f_min, f_max, rng)
+            else:
+                r = generate_spectral(s, x - x_min, f_min, f_max, self.n_freq, rng)
+        elif self.kind == "cosine_dip":
+            u = (x - self.position) / self.length
+            r = np.where((u >= 0) & (u <= 1), 0.5 * self.depth * (1.0 - np.cos(2.0 * math.pi * u)), 0.0)
+        else:  # corrugation
+            inside = (x >= self.start) & (x <= self.end)
+            r = np.where(inside, 0.5 * self.amplitude * (1.0 - np.cos(2.0 * math.pi * (x - self.start) / self.wavelength)), 0.0)
+        return float(x_min), float(dx), r * self.scale
+
+    def target_variance(self) -> float:
+        """Variance (m²) the spectrum assigns to the band, including ``scale``."""
+        if self.kind not in SPECTRA:
+            raise config_error("irregularity.kind", self.kind, "only spectra have a target variance")
+        return self.scale**2 * band_variance(self.kind, self.wavelength_min, self.wavelength_max, sato_a=self.sato_a)

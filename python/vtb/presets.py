@@ -1,0 +1,95 @@
+"""Ready-made configurations.
+
+The numbers of the article's case live in the Rust core (``rust/src/presets.rs``); this
+module turns them into :class:`~vtb.config.Config` objects and adds the Python-side
+irregularity. Every choice the article leaves open is documented in ``docs/model-choices.md``.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Optional, Sequence
+
+from . import _core
+from .config import Config, Coupling, Layer, MovingForce, RayleighCoefficients, Solver, Structure, Vehicle
+from .irregularity import Irregularity
+
+#: Seed of the paper preset's irregularity sample.
+PAPER_SEED = 2025
+
+
+def paper_irregularity(seed: int = PAPER_SEED, scale: float = 1.0) -> Irregularity:
+    """The paper preset's irregularity: the TB/T 3352 vertical spectrum extrapolated to the
+    0.01–1 m band (the article: "based on the standard Chinese spectrum"), inverse-FFT sample,
+    1 mm sampling."""
+    return Irregularity(kind="tbt3352", wavelength_min=0.01, wavelength_max=1.0, method="ifft", seed=seed, dx=0.001, scale=scale)
+
+
+def paper_config(seed: int = PAPER_SEED) -> Config:
+    """The article's §3.3 validation case (Appl. Sci. 2025, 15, 8675).
+
+    Table 1 track–bridge: rail (one CHN60 rail with its fasteners every 0.64 m) on a CRTS II
+    slab, base layer and five 32 m spans continuous over rigid piers (k = 1e15 N/m), 160 m in
+    all; modal basis with rail 120 (+100 local) sines, slab 120, base 120, girder 50, each plus
+    4 boundary functions; one CRH3 trailer car (parameter set A) whose rear wheelset starts
+    1 m onto the bridge; 80 m/s; Newmark Δt = 5e−5 s until the leading wheelset is 1 m from
+    the end (34 531 steps); observation at mid-length; TB/T 3352 irregularity 0.01–1 m.
+    """
+    cfg = Config.from_dict(json.loads(_core.preset("paper")))
+    cfg.irregularity = paper_irregularity(seed)
+    return cfg
+
+
+def crh3_car(x_front: float, motor: bool = False) -> Vehicle:
+    """A CRH3 car, parameter set A (trailer, or motor car), leading wheelset at ``x_front``."""
+    v = paper_config().vehicles[0]
+    v.x_front = x_front
+    if motor:
+        v.m_c, v.m_t, v.j_t, v.k_s, v.c_s, v.k_p, v.c_p = 4.8e4, 3.2e3, 7.2e3, 8.0e5, 9.0e4, 2.08e6, 6.0e4
+    return v
+
+
+def moving_load_config(
+    length: float,
+    density: float,
+    area: float,
+    youngs_modulus: float,
+    inertia: float,
+    forces: Sequence[MovingForce],
+    speed: float,
+    supports: str = "simply_supported",
+    support_stiffness: float = 0.0,
+    support_damping: float = 0.0,
+    support_spacing: Optional[float] = None,
+    modes: int = 50,
+    dt: Optional[float] = None,
+    t_end: Optional[float] = None,
+    points: Sequence[float] = (),
+    damping: Optional[RayleighCoefficients] = None,
+) -> Config:
+    """A single beam under constant moving forces (bridge checks; no vehicle).
+
+    ``supports``: ``"simply_supported"`` (rigid point supports at both ends),
+    ``"winkler"`` (continuous elastic foundation ``support_stiffness`` N/m² with damping) or
+    ``"discrete"`` (springs of ``support_stiffness`` N/m every ``support_spacing`` m). The
+    structure starts undeformed and at rest (Frýba's initial conditions).
+    """
+    if supports == "simply_supported":
+        couplings = [Coupling("beam", "ground", "discrete", 1e15 * max(1.0, youngs_modulus * inertia / length**3), 0.0, [0.0, length])]
+    elif supports == "winkler":
+        couplings = [Coupling("beam", "ground", "continuous", support_stiffness, support_damping)]
+    elif supports == "discrete":
+        if support_spacing is None:
+            from .errors import config_error
+
+            raise config_error("support_spacing", None, "needed for discrete supports")
+        couplings = [Coupling.grid("beam", "ground", support_stiffness, support_damping, support_spacing, length)]
+    else:
+        from .errors import config_error
+
+        raise config_error("supports", supports, "must be \"simply_supported\", \"winkler\" or \"discrete\"")
+    layer = Layer("beam", density, area, youngs_modulus, inertia, modes, damping or RayleighCoefficients(0.0, 0.0))
+    solver = Solver(initial_state="rest", t_end=t_end)
+    if dt is not None:
+        solver.dt = dt
+    return Config(structure=Structure(length, [layer], couplings), speed=speed, forces=list(forces), solver=solver, output=__import__("vtb.config", fromlist=["Output"]).Output(list(points)))

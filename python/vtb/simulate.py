@@ -1,0 +1,192 @@
+"""Running configurations: :func:`simulate` for one run, :func:`simulate_batch` for many in
+parallel inside the Rust core (all cores, GIL released)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Optional, Sequence, Union
+
+import numpy as np
+
+from . import _core
+from .config import Config
+from .errors import VtbError, config_error
+
+#: Extra length of generated irregularity beyond the structure at each end (m).
+_PROFILE_MARGIN = 0.0
+
+
+def _validate_python_side(cfg: Config) -> None:
+    if not isinstance(cfg, Config):
+        raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
+    cfg.irregularity.validate(speed=cfg.speed, dt=cfg.solver.dt)
+
+
+def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
+    """The sampled irregularity (x0, dx, values in m) a configuration runs on."""
+    L = cfg.structure.length
+    return cfg.irregularity.profile(-_PROFILE_MARGIN, L + _PROFILE_MARGIN)
+
+
+@dataclass
+class Result:
+    """Histories of one run, sampled at ``t`` (s).
+
+    Arrays (numpy), all in SI units:
+
+    * ``disp`` (m) and ``acc`` (m/s²): shape (n_t, n_layers, n_points) — vertical displacement
+      (positive down, measured from the unloaded structure, so the static deflection under
+      the wheels is included) and acceleration of each layer at each observation point;
+    * ``vehicle_disp`` (m, rad) and ``vehicle_acc`` (m/s², rad/s²): shape (n_t, n_cars, 10),
+      DOFs [Z_c, β_c, Z_t1, β_t1, Z_t2, β_t2, Z_w1..Z_w4], displacements relative to the
+      static equilibrium at t = 0;
+    * ``contact_force`` (N): shape (n_t, n_wheels), force on the modelled rail per wheelset;
+    * ``contact_loss``: list of (wheel, t_start, t_end or None) periods without contact.
+    """
+
+    t: np.ndarray
+    disp: np.ndarray
+    acc: np.ndarray
+    vehicle_disp: np.ndarray
+    vehicle_acc: np.ndarray
+    contact_force: np.ndarray
+    contact_loss: list
+    layer_names: list
+    points: list
+    config: Config
+    _metrics: dict
+
+    def metrics(self) -> dict[str, float]:
+        """Indices in SI units at the first observation point (model.md §8):
+
+        ``{layer}_disp_max`` (m), ``{layer}_acc_max`` (m/s²), ``{layer}_acc_rms`` (m/s²),
+        ``{layer}_acc_settle`` (s, time after which |a| stays below 5 % of its peak) for each
+        layer; ``car_disp_max`` (m), ``car_acc_max``, ``car_acc_rms`` (m/s²) of the first car
+        body; ``contact_force_max``/``_min`` (N) and ``contact_loss_events``.
+        """
+        return dict(self._metrics)
+
+    def layer(self, name: str) -> int:
+        try:
+            return self.layer_names.index(name)
+        except ValueError:
+            raise config_error("layer", name, f"no layer of that name (layers: {self.layer_names})") from None
+
+    def displacement(self, layer: str, point: int = 0) -> np.ndarray:
+        """Displacement history (m) of a layer at an observation point."""
+        return self.disp[:, self.layer(layer), point]
+
+    def acceleration(self, layer: str, point: int = 0) -> np.ndarray:
+        """Acceleration history (m/s²) of a layer at an observation point."""
+        return self.acc[:, self.layer(layer), point]
+
+    @property
+    def car_body_disp(self) -> np.ndarray:
+        """Car-body bounce of the first car relative to t = 0 (m)."""
+        return self.vehicle_disp[:, 0, 0]
+
+    @property
+    def car_body_acc(self) -> np.ndarray:
+        """Car-body bounce acceleration of the first car (m/s²)."""
+        return self.vehicle_acc[:, 0, 0]
+
+    def save(self, path) -> None:
+        """Writes the histories and metrics to a compressed ``.npz`` file."""
+        np.savez_compressed(
+            path,
+            t=self.t,
+            disp=self.disp,
+            acc=self.acc,
+            vehicle_disp=self.vehicle_disp,
+            vehicle_acc=self.vehicle_acc,
+            contact_force=self.contact_force,
+            layer_names=np.array(self.layer_names),
+            points=np.array(self.points),
+            metric_names=np.array(list(self._metrics)),
+            metric_values=np.array(list(self._metrics.values())),
+        )
+
+
+def simulate(config: Config) -> Result:
+    """Runs one configuration (Ctrl-C interrupts it)."""
+    _validate_python_side(config)
+    x0, dx, values = irregularity_profile(config)
+    out = _core.simulate(config.to_core_json(), x0, dx, values if values.size else None)
+    n = out["n_steps"]
+    return Result(
+        t=np.arange(n + 1) * out["dt"],
+        disp=out["disp"],
+        acc=out["acc"],
+        vehicle_disp=out["vehicle_disp"],
+        vehicle_acc=out["vehicle_acc"],
+        contact_force=out["contact_force"],
+        contact_loss=out["contact_loss"],
+        layer_names=out["layer_names"],
+        points=out["points"],
+        config=config,
+        _metrics=out["metrics"],
+    )
+
+
+def simulate_batch(
+    configs: Sequence[Config],
+    threads: Optional[int] = None,
+    progress: Union[bool, object] = False,
+    on_error: str = "raise",
+) -> list[Union[dict, VtbError]]:
+    """Runs many configurations in parallel in Rust and returns each run's metrics dict.
+
+    ``threads``: worker threads (default: all cores). ``progress``: ``True`` for a tqdm bar,
+    or a callable ``f(done)``. ``on_error``: ``"raise"`` raises the first failure,
+    ``"return"`` puts the exception object in its place and continues. Configurations that
+    share an irregularity specification share one generated profile.
+    """
+    if on_error not in ("raise", "return"):
+        raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
+    jsons, profile_index, profiles, keys = [], [], [], {}
+    results: list = [None] * len(configs)
+    order = []
+    for i, cfg in enumerate(configs):
+        try:
+            _validate_python_side(cfg)
+        except VtbError as e:
+            if on_error == "raise":
+                raise
+            results[i] = e
+            continue
+        key = (repr(cfg.irregularity), cfg.structure.length)
+        if key not in keys:
+            keys[key] = len(profiles)
+            x0, dx, values = irregularity_profile(cfg)
+            profiles.append((x0, dx, values if values.size else None))
+        profile_index.append(keys[key])
+        jsons.append(cfg.to_core_json())
+        order.append(i)
+    bar, callback = None, None
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(jsons), desc="vtb runs", unit="run")
+
+        def callback(done, _bar=bar):
+            _bar.update(done - _bar.n)
+
+    elif callable(progress):
+        callback = progress
+    try:
+        out = _core.batch(jsons, profiles, profile_index, threads or 0, callback)
+    finally:
+        if bar is not None:
+            bar.update(len(jsons) - bar.n)
+            bar.close()
+    for i, r in zip(order, out):
+        if isinstance(r, BaseException) and on_error == "raise":
+            raise r
+        results[i] = r
+    return results
+
+
+def with_changes(config: Config, **changes) -> Config:
+    """A copy of ``config`` with top-level fields replaced (see :func:`dataclasses.replace`)."""
+    return dataclasses.replace(config.copy(), **changes)
