@@ -1,1 +1,45 @@
+//! Solver timing (`cargo bench`): one run of the article's case (vtb.paper_config(): 160 m,
+//! one car, 80 m/s, Δt = 5e−5 s, ≈ 34 500 steps) on one core, with the irregularity sample
+//! the Python preset generates (benches/data, written by benches/make_fixture.py).
 
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::path::Path;
+use vtb::{Model, Profile, presets, simulate::Simulation};
+
+fn paper_profile() -> Profile {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/data");
+    let meta: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("paper_profile.json")).expect("fixture json"),
+    )
+    .expect("json");
+    let bytes = std::fs::read(dir.join("paper_profile.f64")).expect("fixture data");
+    let values = bytes
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    Profile {
+        x0: meta["x0"].as_f64().unwrap(),
+        dx: meta["dx"].as_f64().unwrap(),
+        values,
+    }
+}
+
+fn bench_paper(c: &mut Criterion) {
+    let profile = paper_profile();
+    let mut g = c.benchmark_group("paper_case");
+    g.sample_size(10);
+    g.bench_function("modal_full_run", |b| {
+        b.iter(|| {
+            let model = Model::new(presets::paper(), profile.clone()).unwrap();
+            Simulation::new(&model).unwrap().run(None).unwrap()
+        })
+    });
+    let model = Model::new(presets::paper(), profile.clone()).unwrap();
+    g.bench_function("modal_time_stepping_only", |b| {
+        b.iter(|| Simulation::new(&model).unwrap().run(None).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_paper);
+criterion_main!(benches);

@@ -29,12 +29,12 @@ from .config import (
 from .errors import ConfigError, ConvergenceError, SolverError, VtbError
 from .irregularity import Irregularity
 from .presets import crh3_car, moving_load_config, paper_config, paper_irregularity
-from .simulate import Result, irregularity_profile, simulate, simulate_batch
+from .simulate import Result, assembled_matrices, irregularity_profile, simulate, simulate_batch
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
     "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "irregularity",
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
-    "simulate_batch", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car",
+    "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car",
     "moving_load_config", "__version__",
 ]

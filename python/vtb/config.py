@@ -203,7 +203,9 @@ class Config:
 
     @classmethod
     def from_dict(cls, data: dict) -> "Config":
-        return _from_plain(cls, data, "")
+        cfg = _from_plain(cls, data, "")
+        check_types(cfg)
+        return cfg
 
     def to_toml(self, path: Union[str, Path, None] = None) -> str:
         import tomli_w
@@ -316,6 +318,63 @@ def _damping_from_plain(v, path: str) -> Damping:
     if cls is None:
         raise config_error(f"{path}.kind", kind, "must be \"ratio\" or \"coefficients\"")
     return _from_plain(cls, d, path)
+
+
+def check_types(obj, path: str = "") -> None:
+    """Checks every field of a configuration tree against its annotation (numbers are real
+    numbers — not bools or strings —, integers integral, literals among their choices, lists
+    lists) and raises :class:`~vtb.errors.ConfigError` naming the first offending field."""
+    if isinstance(obj, (RayleighRatio, RayleighCoefficients, Irregularity)) or dataclasses.is_dataclass(obj):
+        hints = typing.get_type_hints(type(obj))
+        for f in dataclasses.fields(obj):
+            sub = f"{path}.{f.name}" if path else f.name
+            v = getattr(obj, f.name)
+            item = _LIST_ITEM.get((type(obj).__name__, f.name))
+            if item is not None:
+                if not isinstance(v, (list, tuple)):
+                    raise config_error(sub, v, "expected a list")
+                for i, x in enumerate(v):
+                    if not isinstance(x, item):
+                        raise config_error(f"{sub}[{i}]", x, f"expected a {item.__name__}")
+                    check_types(x, f"{sub}[{i}]")
+            else:
+                _check_value(v, hints[f.name], sub)
+
+
+def _check_value(v, hint, path: str) -> None:
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin is Union:
+        if v is None and type(None) in args:
+            return
+        options = [a for a in args if a is not type(None)]
+        if len(options) == 1:
+            return _check_value(v, options[0], path)
+        if any(dataclasses.is_dataclass(a) and isinstance(v, a) for a in options):
+            return check_types(v, path)
+        raise config_error(path, v, f"expected one of {[getattr(a, '__name__', a) for a in options]}")
+    if origin is Literal:
+        if v not in args:
+            raise config_error(path, v, f"must be one of {list(args)}")
+        return
+    if hint is float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)) and not (hasattr(v, "dtype") and v.dtype.kind in "fiu" and getattr(v, "ndim", 1) == 0):
+            raise config_error(path, v, "must be a number")
+    elif hint is int:
+        if isinstance(v, bool) or not (isinstance(v, int) or (hasattr(v, "dtype") and v.dtype.kind in "iu" and getattr(v, "ndim", 1) == 0)):
+            raise config_error(path, v, "must be an integer")
+    elif hint is str:
+        if not isinstance(v, str):
+            raise config_error(path, v, "must be a string")
+    elif hint is list or origin is list:
+        if not isinstance(v, (list, tuple)) and not hasattr(v, "tolist"):
+            raise config_error(path, v, "must be a list")
+        for i, x in enumerate(list(v)):
+            if isinstance(x, bool) or not isinstance(x, (int, float)) and not hasattr(x, "dtype"):
+                raise config_error(f"{path}[{i}]", x, "must be a number")
+    elif dataclasses.is_dataclass(hint):
+        if not isinstance(v, hint):
+            raise config_error(path, v, f"expected a {hint.__name__}")
+        check_types(v, path)
 
 
 def core_dict(cfg: Config) -> dict[str, Any]:

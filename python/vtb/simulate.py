@@ -10,7 +10,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from . import _core
-from .config import Config
+from .config import Config, check_types
 from .errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
@@ -20,7 +20,10 @@ _PROFILE_MARGIN = 0.0
 def _validate_python_side(cfg: Config) -> None:
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
+    check_types(cfg)
     cfg.irregularity.validate(speed=cfg.speed, dt=cfg.solver.dt)
+    # The core checks everything else before a profile is generated from the structure.
+    _core.validate(cfg.to_core_json())
 
 
 def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
@@ -190,3 +193,19 @@ def simulate_batch(
 def with_changes(config: Config, **changes) -> Config:
     """A copy of ``config`` with top-level fields replaced (see :func:`dataclasses.replace`)."""
     return dataclasses.replace(config.copy(), **changes)
+
+
+def assembled_matrices(config: Config) -> dict:
+    """The assembled structure matrices of a configuration as dense numpy arrays:
+    ``{"m", "k", "c"}`` (kg, N/m, N·s/m in generalised coordinates) and ``"layers"``, a list
+    of (name, first DOF, number of DOFs)."""
+    out = _core.matrices(config.to_core_json())
+    n = out["n"]
+    dense = {}
+    for name in ("m", "k", "c"):
+        r, c, v = out[name]
+        a = np.zeros((n, n))
+        np.add.at(a, (r, c), v)
+        dense[name] = a
+    dense["layers"] = out["layer_offsets"]
+    return dense

@@ -363,11 +363,24 @@ impl Profile {
 // Validation
 // ---------------------------------------------------------------------------------------------
 
+/// Largest magnitude accepted for any parameter: beyond it products of parameters overflow.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
 fn finite(field: &str, v: f64) -> Result<f64> {
-    if v.is_finite() {
-        Ok(v)
+    if !v.is_finite() {
+        Err(VtbError::config(
+            field,
+            format!("{v:?}"),
+            "must be a finite number",
+        ))
+    } else if v.abs() > MAX_MAGNITUDE {
+        Err(VtbError::config(
+            field,
+            format!("{v:?}"),
+            format!("magnitude beyond {MAX_MAGNITUDE:e} is not physical"),
+        ))
     } else {
-        Err(VtbError::config(field, v, "must be a finite number"))
+        Ok(v)
     }
 }
 
@@ -376,7 +389,7 @@ fn positive(field: &str, v: f64) -> Result<f64> {
     if v > 0.0 {
         Ok(v)
     } else {
-        Err(VtbError::config(field, v, "must be > 0"))
+        Err(VtbError::config(field, format!("{v:?}"), "must be > 0"))
     }
 }
 
@@ -385,7 +398,7 @@ fn non_negative(field: &str, v: f64) -> Result<f64> {
     if v >= 0.0 {
         Ok(v)
     } else {
-        Err(VtbError::config(field, v, "must be >= 0"))
+        Err(VtbError::config(field, format!("{v:?}"), "must be >= 0"))
     }
 }
 
@@ -396,7 +409,7 @@ fn within(field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
     } else {
         Err(VtbError::config(
             field,
-            v,
+            format!("{v:?}"),
             format!("must lie within [{lo}, {hi}] ({what})"),
         ))
     }

@@ -327,8 +327,11 @@ impl<'m> Simulation<'m> {
         let mut loss_open: Vec<Option<f64>> = vec![None; nw];
 
         for step in 0..self.n_steps {
-            if step % 1024 == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                return Err(VtbError::Cancelled);
+            if step % 1024 == 0 {
+                if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    return Err(VtbError::Cancelled);
+                }
+                self.check_finite(step)?;
             }
             let t1 = (step + 1) as f64 * dt;
             self.f_next.fill(0.0);
@@ -430,6 +433,7 @@ impl<'m> Simulation<'m> {
             }
             self.record(&mut res, step + 1);
         }
+        self.check_finite(self.n_steps)?;
         for (wi, open) in loss_open.iter().enumerate() {
             if let Some(t0) = open {
                 res.contact_loss.push(ContactLoss {
@@ -440,6 +444,24 @@ impl<'m> Simulation<'m> {
             }
         }
         Ok(res)
+    }
+
+    /// A non-finite state (overflow from extreme parameters) is an error, never a result.
+    fn check_finite(&self, step: usize) -> Result<()> {
+        let ok = self.track.u.iter().all(|v| v.is_finite())
+            && self.p.iter().all(|v| v.is_finite())
+            && (0..self.track.n_observed()).all(|j| self.track.observed(j).2.is_finite())
+            && self
+                .cars
+                .iter()
+                .all(|c| (0..N_DOF).all(|i| c.nm.observed(i).2.is_finite()));
+        if ok {
+            Ok(())
+        } else {
+            Err(VtbError::Solver(format!(
+                "the state became non-finite by step {step}: parameters of extreme magnitude?"
+            )))
+        }
     }
 
     fn record(&self, res: &mut RunResult, step: usize) {

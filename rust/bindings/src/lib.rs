@@ -25,12 +25,29 @@ fn make_exception<'py>(py: Python<'py>, e: &VtbError) -> PyResult<Bound<'py, PyA
     let errors = py.import("vtb.errors")?;
     let msg = e.to_string();
     match e {
-        VtbError::Config { field, value, reason } => errors.getattr("ConfigError")?.call1((msg, field.as_str(), value.as_str(), reason.as_str())),
-        VtbError::ContactNotConverged { time, step, residual, iterations } => {
-            errors.getattr("ConvergenceError")?.call1((msg, *time, *step, *residual, *iterations))
-        }
+        VtbError::Config {
+            field,
+            value,
+            reason,
+        } => errors.getattr("ConfigError")?.call1((
+            msg,
+            field.as_str(),
+            value.as_str(),
+            reason.as_str(),
+        )),
+        VtbError::ContactNotConverged {
+            time,
+            step,
+            residual,
+            iterations,
+        } => errors
+            .getattr("ConvergenceError")?
+            .call1((msg, *time, *step, *residual, *iterations)),
         VtbError::Solver(_) => errors.getattr("SolverError")?.call1((msg,)),
-        VtbError::Cancelled => Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(msg).into_value(py).into_bound(py).into_any()),
+        VtbError::Cancelled => Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(msg)
+            .into_value(py)
+            .into_bound(py)
+            .into_any()),
     }
 }
 
@@ -81,7 +98,9 @@ fn run_detached<T: Send>(
                 .map(|s| s.to_string())
                 .or_else(|| panic.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown".into());
-            let errors = py.import("vtb.errors").and_then(|m| m.getattr("SolverError"));
+            let errors = py
+                .import("vtb.errors")
+                .and_then(|m| m.getattr("SolverError"));
             match errors.and_then(|cls| cls.call1((format!("internal error: {what}"),))) {
                 Ok(obj) => PyErr::from_value(obj),
                 Err(e) => e,
@@ -97,7 +116,14 @@ fn parse_config(py: Python<'_>, json: &str) -> PyResult<Config> {
 fn make_profile(x0: f64, dx: f64, values: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Profile> {
     Ok(match values {
         None => Profile::flat(),
-        Some(v) => Profile { x0, dx, values: v.as_slice().map_err(|e| PyRuntimeError::new_err(e.to_string()))?.to_vec() },
+        Some(v) => Profile {
+            x0,
+            dx,
+            values: v
+                .as_slice()
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
+                .to_vec(),
+        },
     })
 }
 
@@ -110,11 +136,26 @@ fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bound<'py, PyD
     d.set_item("layer_names", r.layer_names.clone())?;
     d.set_item("points", r.points.clone())?;
     d.set_item("metrics", r.metrics())?;
-    d.set_item("disp", PyArray1::from_vec(py, r.disp).reshape([steps, nl, np])?)?;
-    d.set_item("acc", PyArray1::from_vec(py, r.acc).reshape([steps, nl, np])?)?;
-    d.set_item("vehicle_disp", PyArray1::from_vec(py, r.vehicle_disp).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?)?;
-    d.set_item("vehicle_acc", PyArray1::from_vec(py, r.vehicle_acc).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?)?;
-    d.set_item("contact_force", PyArray1::from_vec(py, r.contact_force).reshape([steps, r.n_wheels])?)?;
+    d.set_item(
+        "disp",
+        PyArray1::from_vec(py, r.disp).reshape([steps, nl, np])?,
+    )?;
+    d.set_item(
+        "acc",
+        PyArray1::from_vec(py, r.acc).reshape([steps, nl, np])?,
+    )?;
+    d.set_item(
+        "vehicle_disp",
+        PyArray1::from_vec(py, r.vehicle_disp).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?,
+    )?;
+    d.set_item(
+        "vehicle_acc",
+        PyArray1::from_vec(py, r.vehicle_acc).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?,
+    )?;
+    d.set_item(
+        "contact_force",
+        PyArray1::from_vec(py, r.contact_force).reshape([steps, r.n_wheels])?,
+    )?;
     let losses = PyList::empty(py);
     for l in &r.contact_loss {
         losses.append((l.wheel, l.t_start, l.t_end))?;
@@ -128,23 +169,77 @@ fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bound<'py, PyD
 fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
     vtb::presets::by_name(name)
         .map(|c| c.to_json())
-        .ok_or_else(|| to_py_err(py, VtbError::config("preset", name, "unknown preset (known: \"paper\")")))
+        .ok_or_else(|| {
+            to_py_err(
+                py,
+                VtbError::config("preset", name, "unknown preset (known: \"paper\")"),
+            )
+        })
 }
 
 /// Validates a JSON configuration against an irregularity profile; raises on the first
 /// problem.
 #[pyfunction]
 #[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
-fn validate(py: Python<'_>, config_json: &str, profile_x0: f64, profile_dx: f64, profile: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
+fn validate(
+    py: Python<'_>,
+    config_json: &str,
+    profile_x0: f64,
+    profile_dx: f64,
+    profile: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<()> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile)?;
     cfg.validate(&p).map_err(|e| to_py_err(py, e))
 }
 
+/// The assembled structure matrices M, K, C of a configuration as COO triplets
+/// (rows, cols, values) with their dimension, plus each layer's DOF offset.
+#[pyfunction]
+fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let st = &model.structure;
+    let d = PyDict::new(py);
+    d.set_item("n", st.n_dofs)?;
+    for (name, m) in [("m", &st.m), ("k", &st.k), ("c", &st.c)] {
+        let mut rows = Vec::with_capacity(m.nnz());
+        for i in 0..m.n {
+            rows.extend(std::iter::repeat_n(
+                i as i64,
+                m.row_ptr[i + 1] - m.row_ptr[i],
+            ));
+        }
+        let cols: Vec<i64> = m.col_idx.iter().map(|&c| c as i64).collect();
+        d.set_item(
+            name,
+            (
+                PyArray1::from_vec(py, rows),
+                PyArray1::from_vec(py, cols),
+                PyArray1::from_vec(py, m.values.clone()),
+            ),
+        )?;
+    }
+    d.set_item(
+        "layer_offsets",
+        st.layers
+            .iter()
+            .map(|l| (l.name.clone(), l.offset, l.n_dofs()))
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(d)
+}
+
 /// Runs one configuration; returns a dict of histories and metrics.
 #[pyfunction]
 #[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
-fn simulate<'py>(py: Python<'py>, config_json: &str, profile_x0: f64, profile_dx: f64, profile: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Bound<'py, PyDict>> {
+fn simulate<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    profile_x0: f64,
+    profile_dx: f64,
+    profile: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile)?;
     let out = run_detached(py, None, |cancel, _| vtb::simulate(&cfg, &p, Some(cancel)))?;
@@ -167,13 +262,32 @@ fn batch<'py>(
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     if configs.len() != profile_index.len() {
-        return Err(to_py_err(py, VtbError::config("profile_index", profile_index.len(), format!("needs one entry per config ({})", configs.len()))));
+        return Err(to_py_err(
+            py,
+            VtbError::config(
+                "profile_index",
+                profile_index.len(),
+                format!("needs one entry per config ({})", configs.len()),
+            ),
+        ));
     }
-    let shared: Vec<Arc<Profile>> = profiles.into_iter().map(|(x0, dx, v)| make_profile(x0, dx, v).map(Arc::new)).collect::<PyResult<_>>()?;
+    let shared: Vec<Arc<Profile>> = profiles
+        .into_iter()
+        .map(|(x0, dx, v)| make_profile(x0, dx, v).map(Arc::new))
+        .collect::<PyResult<_>>()?;
     let mut jobs = Vec::with_capacity(configs.len());
     let mut parse_errors: Vec<Option<VtbError>> = Vec::with_capacity(configs.len());
     for (i, (text, &pi)) in configs.iter().zip(&profile_index).enumerate() {
-        let profile = shared.get(pi).cloned().ok_or_else(|| to_py_err(py, VtbError::config(format!("profile_index[{i}]"), pi, format!("only {} profiles given", shared.len()))))?;
+        let profile = shared.get(pi).cloned().ok_or_else(|| {
+            to_py_err(
+                py,
+                VtbError::config(
+                    format!("profile_index[{i}]"),
+                    pi,
+                    format!("only {} profiles given", shared.len()),
+                ),
+            )
+        })?;
         match Config::from_json(text) {
             Ok(config) => {
                 jobs.push(Job { config, profile });
@@ -182,8 +296,13 @@ fn batch<'py>(
             Err(e) => parse_errors.push(Some(e)),
         }
     }
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    let results = run_detached(py, progress.as_ref(), |cancel, done| pool.install(|| vtb::run_batch(&jobs, Some(cancel), Some(done))))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let results = run_detached(py, progress.as_ref(), |cancel, done| {
+        pool.install(|| vtb::run_batch(&jobs, Some(cancel), Some(done)))
+    })?;
     let out = PyList::empty(py);
     let mut it = results.into_iter();
     for pe in parse_errors {
@@ -191,7 +310,9 @@ fn batch<'py>(
             Some(e) => make_exception(py, &e)?,
             None => match it.next().expect("one result per parsed config") {
                 Ok(m) => m.into_pyobject(py)?.into_any(),
-                Err(VtbError::Cancelled) => return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled")),
+                Err(VtbError::Cancelled) => {
+                    return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"));
+                }
                 Err(e) => make_exception(py, &e)?,
             },
         };
@@ -205,6 +326,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(matrices, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
