@@ -8,41 +8,37 @@
 //!   u_{n+1} = u_n + Δt·v̄,   q_{n+1} = (4M − Δt²K)·v̄ − q_n − 2Δt·s_n,   s_{n+1} = s_n + Δt·K·v̄,
 //!
 //! with q_n = 2M·v_n − Δt·K·u_n and s_n = K·u_n carried from step to step. A is factorised
-//! once; a step costs one product with the pair (4M − Δt²K, K) on one sparsity pattern and
-//! one triangular solve. Accelerations are those of Newmark's scheme,
+//! once; a step costs the products M·v̄ and K·v̄ and one solve with A. Accelerations are those of Newmark's scheme,
 //! a_{n+1} = 4(v̄ − v_n)/Δt − a_n, evaluated at observation vectors only.
 //!
 //! Contact forces act through *ports*: a port of a subsystem has a force vector f (where the
 //! force enters) and a displacement vector n (what the contact sees); for the rail both are
 //! the shape vector at the wheel, for a car both are the unit vector of a wheelset DOF. The
 //! port displacements at t_{n+1} are affine in the unknown forces with the compliance
-//! (Δt²/2)·n_iᵀA⁻¹f_j = (Δt²/2)·(L⁻¹n_i)ᵀD⁻¹(L⁻¹f_j) for P·A·Pᵀ = L·D·Lᵀ, so the port vectors
-//! are forward-substituted together with the right-hand side, the contact Newton iterates on
-//! the wheel forces alone, and one backward substitution of the combined right-hand side
-//! finishes the step.
+//! (Δt²/2)·n_iᵀA⁻¹n_j, so the contact Newton iterates on the wheel forces alone.
+//! With P·A·Pᵀ = L·D·Lᵀ that compliance is (L⁻¹n_i)ᵀD⁻¹(L⁻¹n_j): the port vectors are
+//! forward-substituted together with the right-hand side and one backward substitution of
+//! the combined right-hand side finishes the step.
 
 use crate::basis::Shape;
 use crate::error::Result;
 use crate::sparse::{CsrMatrix, Ldlt, SymOperator};
 
-/// Port columns forward-substituted together (one car: four wheelsets).
+/// Port columns processed together (one car: four wheelsets).
 pub const GW: usize = 4;
 
-/// A vector expressed in a stepper's permuted numbering (only its nonzeros).
+/// A sparse vector in a stepper's numbering.
 #[derive(Clone, Debug, Default)]
-pub struct Gathered {
+pub struct SVec {
     pub idx: Vec<usize>,
     pub val: Vec<f64>,
+    /// (start, length) of the shape vector it was built from: a shape on the same DOFs
+    /// (a modal layer at any x) only needs new values.
+    key: Option<(usize, usize)>,
 }
 
-impl Gathered {
-    pub fn from_shape(s: &Shape, inv: &[usize]) -> Self {
-        Self {
-            idx: (0..s.values.len()).map(|k| inv[s.start + k]).collect(),
-            val: s.values.clone(),
-        }
-    }
-
+impl SVec {
+    /// selfᵀ·x.
     #[inline]
     pub fn dot(&self, x: &[f64]) -> f64 {
         self.idx
@@ -51,88 +47,63 @@ impl Gathered {
             .map(|(&i, &v)| v * x[i])
             .sum()
     }
+
+    /// x += w·self.
+    #[inline]
+    pub fn add_to(&self, x: &mut [f64], w: f64) {
+        for (&i, &v) in self.idx.iter().zip(&self.val) {
+            x[i] += w * v;
+        }
+    }
 }
 
-/// Up to GW ports forward-substituted as interleaved columns.
+/// Up to GW contact ports of one subsystem (one car's wheels) and the data the engine derives
+/// from them each step.
 #[derive(Clone, Debug)]
 pub struct PortBlock {
-    /// L⁻¹·P·f_c for column c, at `[k·GW + c]`.
-    pub cols: Vec<f64>,
-    /// First nonzero row (in elimination order).
-    pub start: usize,
-    /// The ports' displacement vectors (permuted numbering).
-    pub shapes: [Gathered; GW],
+    /// The port vectors (stepper coordinates).
+    pub vecs: [SVec; GW],
+    /// L⁻¹·P·n_c at `[k·GW + c]`.
+    cols: Vec<f64>,
+    /// First nonzero row in elimination order.
+    start: usize,
 }
 
 impl PortBlock {
     pub fn new(n: usize) -> Self {
         Self {
+            vecs: Default::default(),
             cols: vec![0.0; n * GW],
             start: n,
-            shapes: Default::default(),
-        }
-    }
-
-    /// Clears the columns (only the part a previous forward solve could have filled).
-    pub fn clear(&mut self) {
-        let s = self.start.min(self.cols.len() / GW);
-        self.cols[s * GW..].fill(0.0);
-        self.start = self.cols.len() / GW;
-        for g in &mut self.shapes {
-            g.idx.clear();
-            g.val.clear();
-        }
-    }
-
-    /// Sets column `c` to the gathered vector `g`.
-    pub fn set(&mut self, c: usize, g: &Gathered) {
-        for (&i, &v) in g.idx.iter().zip(&g.val) {
-            self.cols[i * GW + c] = v;
-            self.start = self.start.min(i);
-        }
-        self.shapes[c].idx.extend_from_slice(&g.idx);
-        self.shapes[c].val.extend_from_slice(&g.val);
-    }
-
-    /// Sets column `c` to a layer shape vector, `map` taking layer DOFs to permuted indices.
-    pub fn set_shape(&mut self, c: usize, shape: &Shape, map: &[usize]) {
-        let g = &mut self.shapes[c];
-        for (k, &v) in shape.values.iter().enumerate() {
-            let i = map[shape.start + k];
-            self.cols[i * GW + c] = v;
-            self.start = self.start.min(i);
-            g.idx.push(i);
-            g.val.push(v);
         }
     }
 }
 
-/// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F.
+/// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F. Vectors, forces and
+/// observations live in the numbering of the LDLᵀ factor of A.
 #[derive(Clone, Debug)]
 pub struct Newmark {
     pub n: usize,
     pub dt: f64,
     factor: Ldlt,
-    /// M and K for the products M·v̄ and K·v̄ (solver numbering).
-    m_op: SymOperator,
-    k_op: SymOperator,
-    /// Displacements, solver numbering.
+    /// M and K for the products M·v̄ and K·v̄ in one pass.
+    mk: SymOperator,
+    /// Displacements.
     pub u: Vec<f64>,
     q: Vec<f64>,
     s: Vec<f64>,
-    /// Right-hand side during a step (forward-substituted); v̄ after `end_step`.
+    /// During a step the forward-substituted right-hand side; v̄ after `end_step`.
     z: Vec<f64>,
-    /// M·v̄ and K·v̄.
     y1: Vec<f64>,
     y2: Vec<f64>,
-    obs: Vec<Gathered>,
+    obs: Vec<SVec>,
     obs_v: Vec<f64>,
     obs_a: Vec<f64>,
 }
 
 impl Newmark {
-    /// `ports` lists the unknowns contact forces act on (they are eliminated late so that
-    /// port vectors forward-substitute cheaply).
+    /// `ports` lists the unknowns contact forces act on (eliminated late so that port vectors
+    /// forward-substitute cheaply).
     pub fn new(
         m: &CsrMatrix,
         c: &CsrMatrix,
@@ -143,16 +114,12 @@ impl Newmark {
         let n = m.n;
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
         let factor = Ldlt::for_stepping(&a, ports)?;
-        let (m_op, k_op) = (
-            SymOperator::new(m, &factor.perm),
-            SymOperator::new(k, &factor.perm),
-        );
+        let mk = SymOperator::new(&[m, k], &factor.perm);
         Ok(Self {
             n,
             dt,
             factor,
-            m_op,
-            k_op,
+            mk,
             u: vec![0.0; n],
             q: vec![0.0; n],
             s: vec![0.0; n],
@@ -165,35 +132,44 @@ impl Newmark {
         })
     }
 
-    /// Original index → position in elimination order.
-    pub fn inv(&self) -> &[usize] {
-        &self.factor.inv
+    /// A shape vector (original numbering) in the stepper's numbering, into `out`.
+    #[inline]
+    pub fn vector_into(&self, shape: &Shape, out: &mut SVec) {
+        let key = (shape.start, shape.values.len());
+        if out.key != Some(key) {
+            out.idx.clear();
+            out.idx
+                .extend((0..key.1).map(|k| self.factor.inv[shape.start + k]));
+            out.val.resize(key.1, 0.0);
+            out.key = Some(key);
+        }
+        out.val.copy_from_slice(&shape.values);
     }
 
-    /// Position in elimination order → original index.
-    pub fn perm(&self) -> &[usize] {
-        &self.factor.perm
+    pub fn vector(&self, shape: &Shape) -> SVec {
+        let mut v = SVec::default();
+        self.vector_into(shape, &mut v);
+        v
     }
 
-    pub fn factor(&self) -> &Ldlt {
-        &self.factor
-    }
-
-    pub fn to_permuted(&self, x: &[f64]) -> Vec<f64> {
+    /// A dense vector (original numbering) in the stepper's numbering.
+    pub fn to_stepper(&self, x: &[f64]) -> Vec<f64> {
         self.factor.perm.iter().map(|&i| x[i]).collect()
     }
 
-    pub fn to_original(&self, xp: &[f64]) -> Vec<f64> {
+    /// Current displacements in the original numbering.
+    pub fn displacements(&self) -> Vec<f64> {
         let mut x = vec![0.0; self.n];
         for (k, &i) in self.factor.perm.iter().enumerate() {
-            x[i] = xp[k];
+            x[i] = self.u[k];
         }
         x
     }
 
     /// Registers an observation vector (original numbering); returns its index.
     pub fn observe(&mut self, shape: &Shape) -> usize {
-        self.obs.push(Gathered::from_shape(shape, &self.factor.inv));
+        let v = self.vector(shape);
+        self.obs.push(v);
         self.obs_v.push(0.0);
         self.obs_a.push(0.0);
         self.obs.len() - 1
@@ -207,15 +183,14 @@ impl Newmark {
         let (mut ku, mut mv) = (vec![0.0; n], vec![0.0; n]);
         k.mul(u0, &mut ku);
         m.mul(v0, &mut mv);
-        for (p, &i) in self.factor.perm.iter().enumerate() {
-            self.u[p] = u0[i];
-            self.s[p] = ku[i];
-            self.q[p] = 2.0 * mv[i] - self.dt * ku[i];
-        }
-        let (vp, ap) = (self.to_permuted(v0), self.to_permuted(a0));
+        let q: Vec<f64> = (0..n).map(|i| 2.0 * mv[i] - self.dt * ku[i]).collect();
+        self.q = self.to_stepper(&q);
+        self.s = self.to_stepper(&ku);
+        self.u = self.to_stepper(u0);
+        let (vt, at) = (self.to_stepper(v0), self.to_stepper(a0));
         for (j, o) in self.obs.iter().enumerate() {
-            self.obs_v[j] = o.dot(&vp);
-            self.obs_a[j] = o.dot(&ap);
+            self.obs_v[j] = o.dot(&vt);
+            self.obs_a[j] = o.dot(&at);
         }
     }
 
@@ -228,7 +203,7 @@ impl Newmark {
         self.obs.len()
     }
 
-    /// Starts a step: z = L⁻¹·P·(q + (Δt/2)(F_n + F_{n+1})) for the known forces (permuted).
+    /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering).
     pub fn begin_step(&mut self, f_prev: &[f64], f_next: &[f64]) {
         let h = 0.5 * self.dt;
         for k in 0..self.n {
@@ -237,13 +212,21 @@ impl Newmark {
         self.factor.forward::<1>(&mut self.z, 0);
     }
 
-    /// Forward-substitutes a port block in place.
-    pub fn forward_ports(&self, ports: &mut PortBlock) {
+    /// Forward-substitutes the port vectors set this step.
+    pub fn prepare_ports(&self, ports: &mut PortBlock) {
+        let s = ports.start.min(self.n);
+        ports.cols[s * GW..].fill(0.0);
+        ports.start = self.n;
+        for (c, v) in ports.vecs.iter().enumerate() {
+            for (&i, &val) in v.idx.iter().zip(&v.val) {
+                ports.cols[i * GW + c] = val;
+                ports.start = ports.start.min(i);
+            }
+        }
         self.factor.forward::<GW>(&mut ports.cols, ports.start);
     }
 
-    /// Port displacements at t_{n+1} without the unknown port forces:
-    /// n_cᵀ(u_n + Δt·A⁻¹·b).
+    /// Port displacements at t_{n+1} without the unknown port forces: n_cᵀ(u_n + Δt·A⁻¹·b).
     pub fn free_port_disp(&self, ports: &PortBlock) -> [f64; GW] {
         let d = self.factor.d_inv();
         let mut acc = [0.0; GW];
@@ -254,10 +237,10 @@ impl Newmark {
                 acc[c] += r[c] * w;
             }
         }
-        std::array::from_fn(|c| ports.shapes[c].dot(&self.u) + self.dt * acc[c])
+        std::array::from_fn(|c| ports.vecs[c].dot(&self.u) + self.dt * acc[c])
     }
 
-    /// Port compliance (Δt²/2)·n_iᵀA⁻¹f_j between two port blocks (rows: `a`, cols: `b`).
+    /// Port compliance (Δt²/2)·n_iᵀA⁻¹n_j between two port blocks (rows: `a`, cols: `b`).
     pub fn port_compliance(&self, a: &PortBlock, b: &PortBlock) -> [[f64; GW]; GW] {
         let d = self.factor.d_inv();
         let mut g = [[0.0; GW]; GW];
@@ -274,7 +257,7 @@ impl Newmark {
         g.map(|row| row.map(|v| c2 * v))
     }
 
-    /// Adds the port forces (Δt/2)·Σ_c w_c·f_c of the step to the right-hand side.
+    /// Adds the port forces (Δt/2)·Σ_c w_c·n_c of the step.
     pub fn add_port_forces(&mut self, ports: &PortBlock, w: [f64; GW]) {
         let h = 0.5 * self.dt;
         for k in ports.start..self.n {
@@ -289,14 +272,28 @@ impl Newmark {
 
     /// Finishes the step: back-substitution for v̄ and the state update.
     pub fn end_step(&mut self) {
-        self.factor.diag_backward(&mut self.z);
         let dt = self.dt;
-        self.m_op.mul(&self.z, &mut self.y1);
-        self.k_op.mul(&self.z, &mut self.y2);
-        for k in 0..self.n {
-            self.u[k] += dt * self.z[k];
-            self.q[k] = 4.0 * self.y1[k] - dt * dt * self.y2[k] - self.q[k] - 2.0 * dt * self.s[k];
-            self.s[k] += dt * self.y2[k];
+        self.factor.diag_backward(&mut self.z);
+        self.mk.mul2(&self.z, &mut self.y1, &mut self.y2);
+        let (u, q, sv, z, y1, y2) = (
+            &mut self.u[..],
+            &mut self.q[..],
+            &mut self.s[..],
+            &self.z[..],
+            &self.y1[..],
+            &self.y2[..],
+        );
+        for (((((uk, qk), sk), zk), mk), kk) in u
+            .iter_mut()
+            .zip(q.iter_mut())
+            .zip(sv.iter_mut())
+            .zip(z)
+            .zip(y1)
+            .zip(y2)
+        {
+            *uk += dt * zk;
+            *qk = 4.0 * mk - dt * dt * kk - *qk - 2.0 * dt * *sk;
+            *sk += dt * kk;
         }
         for (o, (ov, oa)) in self
             .obs

@@ -22,6 +22,7 @@ pub mod layers;
 pub mod model;
 pub mod presets;
 pub mod results;
+pub mod simd;
 pub mod simulate;
 pub mod sparse;
 pub mod structure;

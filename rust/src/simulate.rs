@@ -4,7 +4,7 @@ use crate::basis::Shape;
 use crate::config::{Config, InitialState, Profile};
 use crate::contact::{ContactSolver, compression};
 use crate::error::{Result, VtbError};
-use crate::integrator::{GW, Gathered, Newmark, PortBlock};
+use crate::integrator::{GW, Newmark, PortBlock};
 use crate::model::Model;
 use crate::results::{ContactLoss, RunResult};
 use crate::sparse::{Assembler, CsrMatrix, Ldlt};
@@ -92,17 +92,14 @@ impl CarRun {
         }
         let mut ports = PortBlock::new(N_DOF);
         for w in 0..N_WHEELS {
-            ports.set(
-                w,
-                &Gathered {
-                    idx: vec![nm.inv()[WHEEL0 + w]],
-                    val: vec![1.0],
-                },
-            );
+            ports.vecs[w] = nm.vector(&Shape {
+                start: WHEEL0 + w,
+                values: vec![1.0],
+            });
         }
-        nm.forward_ports(&mut ports);
+        nm.prepare_ports(&mut ports);
         let compliance = nm.port_compliance(&ports, &ports);
-        let gravity = nm.to_permuted(&car.gravity(g));
+        let gravity = nm.to_stepper(&car.gravity(g));
         Ok(Self {
             car: car.clone(),
             nm,
@@ -115,14 +112,20 @@ impl CarRun {
             z0: vec![0.0; N_DOF],
         })
     }
+
+    /// Gravity minus rails·P on the wheelsets (stepper coordinates) into `f_prev`.
+    fn set_force(&mut self, p: &[f64]) {
+        self.f_prev.clone_from(&self.gravity);
+        for w in 0..N_WHEELS {
+            self.ports.vecs[w].add_to(&mut self.f_prev, -self.car.rails * p[w]);
+        }
+    }
 }
 
 /// The state of one coupled run.
 pub struct Simulation<'m> {
     model: &'m Model,
     track: Newmark,
-    /// Per layer: position in elimination order of each layer DOF.
-    pmap: Vec<Vec<usize>>,
     f_prev: Vec<f64>,
     f_next: Vec<f64>,
     movers: Vec<Mover>,
@@ -133,6 +136,7 @@ pub struct Simulation<'m> {
     /// Contact force of each wheel on the modelled rail (N).
     p: Vec<f64>,
     shape: Shape,
+    scratch: crate::integrator::SVec,
     n_steps: usize,
 }
 
@@ -149,11 +153,6 @@ impl<'m> Simulation<'m> {
                 .collect()
         };
         let mut track = Newmark::new(&st.m, &st.c, &st.k, dt, &contact_dofs)?;
-        let pmap = st
-            .layers
-            .iter()
-            .map(|l| (0..l.n_dofs()).map(|k| track.inv()[l.offset + k]).collect())
-            .collect();
         for li in 0..st.layers.len() {
             for x in cfg.observation_points() {
                 track.observe(&st.shape(li, x));
@@ -197,7 +196,6 @@ impl<'m> Simulation<'m> {
             .unwrap_or(0);
         Ok(Self {
             model,
-            pmap,
             f_prev: vec![0.0; n],
             f_next: vec![0.0; n],
             movers,
@@ -209,26 +207,24 @@ impl<'m> Simulation<'m> {
                 start: 0,
                 values: vec![0.0; shape_len],
             },
+            scratch: Default::default(),
             n_steps: cfg.n_steps(),
             track,
         })
     }
 
-    /// Adds w·N_layer(x) to the permuted force vector `f`.
-    fn scatter(
-        model: &Model,
-        pmap: &[Vec<usize>],
-        shape: &mut Shape,
-        f: &mut [f64],
-        layer: usize,
-        x: f64,
-        w: f64,
-    ) {
-        model.structure.layers[layer].basis.eval(x, shape);
-        let map = &pmap[layer];
-        for (k, v) in shape.values.iter().enumerate() {
-            f[map[shape.start + k]] += w * v;
-        }
+    /// f += w·N_layer(x) (stepper coordinates).
+    fn add_load(&mut self, next: bool, layer: usize, x: f64, w: f64) {
+        self.model.structure.shape_into(layer, x, &mut self.shape);
+        self.track.vector_into(&self.shape, &mut self.scratch);
+        self.scratch.add_to(
+            if next {
+                &mut self.f_next
+            } else {
+                &mut self.f_prev
+            },
+            w,
+        );
     }
 
     /// Static (or rest) initial state of track and cars.
@@ -252,33 +248,24 @@ impl<'m> Simulation<'m> {
         }
         self.contact.p_ref.clone_from(&loads);
         self.p.clone_from(&loads);
-        self.f_prev.fill(0.0);
+        // Track load at t = 0 in the original numbering.
+        let n = st.n_dofs;
+        let mut f0 = vec![0.0; n];
+        let mut add = |layer: usize, x: f64, w: f64| {
+            let s = st.shape(layer, x);
+            for (k, v) in s.values.iter().enumerate() {
+                f0[s.start + k] += w * v;
+            }
+        };
         for m in &self.movers {
-            Self::scatter(
-                model,
-                &self.pmap,
-                &mut self.shape,
-                &mut self.f_prev,
-                m.layer,
-                m.x0,
-                m.magnitude,
-            );
+            add(m.layer, m.x0, m.magnitude);
         }
         for (ci, c) in self.cars.iter().enumerate() {
             for w in 0..N_WHEELS {
-                Self::scatter(
-                    model,
-                    &self.pmap,
-                    &mut self.shape,
-                    &mut self.f_prev,
-                    0,
-                    c.car.wheel_x0[w],
-                    loads[ci * N_WHEELS + w],
-                );
+                add(0, c.car.wheel_x0[w], loads[ci * N_WHEELS + w]);
             }
         }
-        let n = st.n_dofs;
-        let f0 = self.track.to_original(&self.f_prev);
+        self.f_prev = self.track.to_stepper(&f0);
         let u0 = match cfg.solver.initial_state {
             InitialState::Static => Ldlt::new(&st.k)
                 .map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?
@@ -304,7 +291,7 @@ impl<'m> Simulation<'m> {
             let av = accelerations(&c.m, &c.k, &z, &f)?;
             c.nm.set_state(&z, &[0.0; N_DOF], &av, &c.k, &c.m);
             c.z0 = z.to_vec();
-            c.f_prev = c.nm.to_permuted(&f);
+            c.set_force(&loads[ci * N_WHEELS..(ci + 1) * N_WHEELS]);
         }
         Ok(())
     }
@@ -335,28 +322,18 @@ impl<'m> Simulation<'m> {
             }
             let t1 = (step + 1) as f64 * dt;
             self.f_next.fill(0.0);
-            for m in &self.movers {
-                Self::scatter(
-                    model,
-                    &self.pmap,
-                    &mut self.shape,
-                    &mut self.f_next,
-                    m.layer,
-                    m.x0 + v * t1,
-                    m.magnitude,
-                );
+            for mi in 0..self.movers.len() {
+                let m = self.movers[mi];
+                self.add_load(true, m.layer, m.x0 + v * t1, m.magnitude);
             }
             self.track.begin_step(&self.f_prev, &self.f_next);
             for (ci, c) in self.cars.iter_mut().enumerate() {
                 let ports = &mut self.track_ports[ci];
-                ports.clear();
                 for w in 0..N_WHEELS {
-                    st.layers[0]
-                        .basis
-                        .eval(c.car.wheel_x0[w] + v * t1, &mut self.shape);
-                    ports.set_shape(w, &self.shape, &self.pmap[0]);
+                    st.shape_into(0, c.car.wheel_x0[w] + v * t1, &mut self.shape);
+                    self.track.vector_into(&self.shape, &mut ports.vecs[w]);
                 }
-                self.track.forward_ports(ports);
+                self.track.prepare_ports(ports);
                 c.nm.begin_step(&c.f_prev, &c.gravity);
             }
             // δ = δ_free − A·P with A = rails·(car compliance) + (rail compliance).
@@ -400,21 +377,14 @@ impl<'m> Simulation<'m> {
                 self.track.add_port_forces(&self.track_ports[ci], p);
                 c.nm.add_port_forces(&c.ports, p.map(|pw| -c.car.rails * pw));
                 c.nm.end_step();
-                c.f_prev.clone_from(&c.gravity);
-                for w in 0..N_WHEELS {
-                    c.f_prev[c.nm.inv()[WHEEL0 + w]] -= c.car.rails * p[w];
-                }
+                c.set_force(&p[..N_WHEELS]);
             }
             self.track.end_step();
             // F_{n+1} becomes F_n: moving forces plus the converged wheel forces.
             std::mem::swap(&mut self.f_prev, &mut self.f_next);
             for (ci, ports) in self.track_ports.iter().enumerate() {
                 for w in 0..N_WHEELS {
-                    let pw = self.p[ci * N_WHEELS + w];
-                    let g = &ports.shapes[w];
-                    for (&i, &val) in g.idx.iter().zip(&g.val) {
-                        self.f_prev[i] += pw * val;
-                    }
+                    ports.vecs[w].add_to(&mut self.f_prev, self.p[ci * N_WHEELS + w]);
                 }
             }
             for wi in 0..nw {

@@ -223,47 +223,56 @@ impl CsrMatrix {
     }
 }
 
-/// A symmetric sparse matrix prepared for repeated products y = A·x: the diagonal as a
-/// vector, the light off-diagonal entries once each (i < j) as a coordinate list applied to
-/// both (i, j) and (j, i), and the few heavy rows (the boundary functions of a modal basis
-/// couple to every sine) as runs of their nonzeros, where one pass serves the heavy row (dot
-/// product) and, by symmetry, the heavy column (axpy). No per-row loops over short rows.
+/// Two symmetric sparse matrices A, B on the union of their patterns, prepared for the
+/// repeated products y_a = A·x, y_b = B·x in one pass: the diagonals as vectors, the light
+/// off-diagonal entries once each (i < j) grouped into diagonal segments (runs of consecutive
+/// i at one offset j − i, as the per-mode chains of a modal basis give in slot-major order)
+/// applied to both (i, j) and (j, i), and the few heavy rows (the boundary functions of a
+/// modal basis couple to every sine) as runs of their nonzeros, where one pass serves the
+/// heavy row (dot product) and, by symmetry, the heavy column (axpy). No per-row loops over
+/// short rows.
 #[derive(Clone, Debug)]
 pub struct SymOperator {
     n: usize,
-    diag: Vec<f64>,
-    /// Light–light off-diagonal pairs (i, j) with i < j.
-    pairs: Vec<(u32, u32)>,
-    pair_vals: Vec<f64>,
+    diag: [Vec<f64>; 2],
+    /// Light–light off-diagonal entries (i, i + d) as segments (first i, length, offset d,
+    /// value offset).
+    segs: Vec<(usize, usize, usize, usize)>,
+    seg_vals: [Vec<f64>; 2],
     /// Heavy rows: index, runs (first column, length, value offset).
     heavy: Vec<(usize, Vec<(usize, usize, usize)>)>,
-    heavy_vals: Vec<f64>,
+    heavy_vals: [Vec<f64>; 2],
 }
 
 impl SymOperator {
-    /// Builds the operator for P·A·Pᵀ, `perm[k]` being the original index of unknown k.
-    pub fn new(a: &CsrMatrix, perm: &[usize]) -> Self {
-        let n = a.n;
+    /// Builds the operator for P·A·Pᵀ and P·B·Pᵀ, `perm[k]` being the original index of
+    /// unknown k.
+    pub fn new(mats: &[&CsrMatrix; 2], perm: &[usize]) -> Self {
+        let pattern = CsrMatrix::combine(&[(1.0, mats[0]), (1.0, mats[1])]);
+        let n = pattern.n;
         let mut inv = vec![0usize; n];
         for (k, &i) in perm.iter().enumerate() {
             inv[i] = k;
         }
         let deg: Vec<usize> = (0..n)
-            .map(|i| a.row_ptr[perm[i] + 1] - a.row_ptr[perm[i]])
+            .map(|i| pattern.row_ptr[perm[i] + 1] - pattern.row_ptr[perm[i]])
             .collect();
         let mean = deg.iter().sum::<usize>() as f64 / n.max(1) as f64;
         let is_heavy: Vec<bool> = deg
             .iter()
             .map(|&d| d as f64 > (4.0 * mean).max(48.0))
             .collect();
-        let mut diag = vec![0.0; n];
-        let (mut pairs, mut pair_vals) = (Vec::new(), Vec::new());
-        let (mut heavy, mut heavy_vals) = (Vec::new(), Vec::new());
-        let mut row: Vec<(usize, f64)> = Vec::new();
+        let mut diag = [vec![0.0; n], vec![0.0; n]];
+        let mut pairs: Vec<(usize, usize, [f64; 2])> = Vec::new();
+        let (mut heavy, mut heavy_vals) = (Vec::new(), [Vec::new(), Vec::new()]);
+        let mut row: Vec<(usize, [f64; 2])> = Vec::new();
         for k in 0..n {
             let i = perm[k];
             row.clear();
-            row.extend((a.row_ptr[i]..a.row_ptr[i + 1]).map(|p| (inv[a.col_idx[p]], a.values[p])));
+            row.extend((pattern.row_ptr[i]..pattern.row_ptr[i + 1]).map(|p| {
+                let j = pattern.col_idx[p];
+                (inv[j], [mats[0].get(i, j), mats[1].get(i, j)])
+            }));
             row.sort_unstable_by_key(|e| e.0);
             if is_heavy[k] {
                 // A heavy row owns every entry of its row; light rows skip heavy columns.
@@ -274,100 +283,125 @@ impl SymOperator {
                     while e < row.len() && row[e].0 == row[e - 1].0 + 1 {
                         e += 1;
                     }
-                    runs.push((row[q].0, e - q, heavy_vals.len()));
-                    heavy_vals.extend(row[q..e].iter().map(|x| x.1));
+                    runs.push((row[q].0, e - q, heavy_vals[0].len()));
+                    for m in 0..2 {
+                        heavy_vals[m].extend(row[q..e].iter().map(|x| x.1[m]));
+                    }
                     q = e;
                 }
                 heavy.push((k, runs));
             } else {
                 for &(j, v) in &row {
                     if j == k {
-                        diag[k] = v;
+                        diag[0][k] = v[0];
+                        diag[1][k] = v[1];
                     } else if j > k && !is_heavy[j] {
-                        pairs.push((k as u32, j as u32));
-                        pair_vals.push(v);
+                        pairs.push((k, j - k, v));
                     }
                 }
             }
         }
+        pairs.sort_unstable_by_key(|&(i, d, _)| (d, i));
+        let (mut segs, mut seg_vals) = (Vec::new(), [Vec::new(), Vec::new()]);
+        let mut q = 0;
+        while q < pairs.len() {
+            let (i0, d, _) = pairs[q];
+            let mut e = q + 1;
+            while e < pairs.len() && pairs[e].1 == d && pairs[e].0 == pairs[e - 1].0 + 1 {
+                e += 1;
+            }
+            segs.push((i0, e - q, d, seg_vals[0].len()));
+            for m in 0..2 {
+                seg_vals[m].extend(pairs[q..e].iter().map(|p| p.2[m]));
+            }
+            q = e;
+        }
         Self {
             n,
             diag,
-            pairs,
-            pair_vals,
+            segs,
+            seg_vals,
             heavy,
             heavy_vals,
         }
     }
 
-    /// Stored entries.
-    pub fn nnz(&self) -> usize {
-        self.diag.len() + 2 * self.pair_vals.len() + self.heavy_vals.len()
+    /// Layout summary (diagnostics).
+    pub fn describe(&self) -> String {
+        format!(
+            "{} segments over {} entries, {} heavy rows with {} runs over {} entries",
+            self.segs.len(),
+            self.seg_vals[0].len(),
+            self.heavy.len(),
+            self.heavy.iter().map(|h| h.1.len()).sum::<usize>(),
+            self.heavy_vals[0].len()
+        )
     }
 
-    /// y = A·x.
-    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
-        assert!(x.len() == self.n && y.len() == self.n);
-        for ((yv, d), xv) in y.iter_mut().zip(&self.diag).zip(x) {
-            *yv = d * xv;
+    /// ya = A·x, yb = B·x.
+    pub fn mul2(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
+        assert!(x.len() == self.n && ya.len() == self.n && yb.len() == self.n);
+        for (((a, b), (da, db)), xv) in ya
+            .iter_mut()
+            .zip(yb.iter_mut())
+            .zip(self.diag[0].iter().zip(&self.diag[1]))
+            .zip(x)
+        {
+            *a = da * xv;
+            *b = db * xv;
         }
-        for (&(i, j), &v) in self.pairs.iter().zip(&self.pair_vals) {
-            let (i, j) = (i as usize, j as usize);
-            // SAFETY: i, j < n by construction.
-            unsafe {
-                *y.get_unchecked_mut(i) += v * *x.get_unchecked(j);
-                *y.get_unchecked_mut(j) += v * *x.get_unchecked(i);
+        for &(i0, len, d, o) in &self.segs {
+            let (va, vb) = (&self.seg_vals[0][o..o + len], &self.seg_vals[1][o..o + len]);
+            if d >= len {
+                // Rows i0.. and i0+d.. are disjoint.
+                let (xlo, xhi) = (&x[i0..i0 + len], &x[i0 + d..i0 + d + len]);
+                for (y, v) in [(&mut *ya, va), (&mut *yb, vb)] {
+                    let (lo, hi) = y.split_at_mut(i0 + d);
+                    let (ylo, yhi) = (&mut lo[i0..i0 + len], &mut hi[..len]);
+                    for q in 0..len {
+                        ylo[q] += v[q] * xhi[q];
+                        yhi[q] += v[q] * xlo[q];
+                    }
+                }
+            } else {
+                for q in 0..len {
+                    ya[i0 + q] += va[q] * x[i0 + d + q];
+                    ya[i0 + d + q] += va[q] * x[i0 + q];
+                    yb[i0 + q] += vb[q] * x[i0 + d + q];
+                    yb[i0 + d + q] += vb[q] * x[i0 + q];
+                }
             }
         }
-        // Heavy rows: their column (axpy) and their row (dot). A heavy row's own output is
+        // Heavy rows: their column (axpy) and their row (dot). A heavy row's own outputs are
         // set afterwards, discarding what the axpys of other heavy rows added there.
-        let mut own = [0.0; 64];
-        for (h, (i, runs)) in self.heavy.iter().enumerate() {
+        let mut own = Vec::with_capacity(0);
+        let mut own_fixed = [[0.0; 2]; 64];
+        let own = if self.heavy.len() <= 64 {
+            &mut own_fixed[..self.heavy.len()]
+        } else {
+            own.resize(self.heavy.len(), [0.0; 2]);
+            &mut own[..]
+        };
+        for ((i, runs), o) in self.heavy.iter().zip(own.iter_mut()) {
             let xi = x[*i];
-            let mut d = 0.0;
-            for &(s, l, o) in runs {
-                d += axpy_dot(
-                    &mut y[s..s + l],
-                    &self.heavy_vals[o..o + l],
+            for &(s, l, off) in runs {
+                let (da, db) = crate::simd::axpy_dot2(
+                    &mut ya[s..s + l],
+                    &mut yb[s..s + l],
+                    &self.heavy_vals[0][off..off + l],
+                    &self.heavy_vals[1][off..off + l],
                     &x[s..s + l],
                     xi,
                 );
+                o[0] += da;
+                o[1] += db;
             }
-            if h < own.len() {
-                own[h] = d;
-            }
         }
-        for (h, (i, runs)) in self.heavy.iter().enumerate() {
-            y[*i] = if h < own.len() {
-                own[h]
-            } else {
-                runs.iter()
-                    .map(|&(s, l, o)| dot4(&self.heavy_vals[o..o + l], &x[s..s + l]))
-                    .sum()
-            };
+        for ((i, _), o) in self.heavy.iter().zip(own.iter()) {
+            ya[*i] = o[0];
+            yb[*i] = o[1];
         }
     }
-}
-
-/// y += a·v and returns a·x, in one pass over equal-length slices.
-#[inline(always)]
-fn axpy_dot(y: &mut [f64], a: &[f64], x: &[f64], v: f64) -> f64 {
-    let n = y.len();
-    let (a, x) = (&a[..n], &x[..n]);
-    let mut s = [0.0; 4];
-    let chunks = n / 4;
-    for c in 0..chunks {
-        for q in 0..4 {
-            let j = 4 * c + q;
-            y[j] += a[j] * v;
-            s[q] += a[j] * x[j];
-        }
-    }
-    for j in 4 * chunks..n {
-        y[j] += a[j] * v;
-        s[0] += a[j] * x[j];
-    }
-    (s[0] + s[1]) + (s[2] + s[3])
 }
 
 /// Reorders `order` so that, after the heavy unknowns are removed, the disjoint components
@@ -420,23 +454,6 @@ fn slot_major(a: &CsrMatrix, order: &[usize], heavy: &[bool], late: &[bool]) -> 
     // Stable: heavy unknowns keep their relative order at the end.
     keyed.sort_by_key(|e| e.0);
     keyed.into_iter().map(|e| e.1).collect()
-}
-
-/// Σ a_i·b_i with four independent partial sums.
-#[inline(always)]
-fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let mut s = [0.0; 4];
-    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ar, br) = (ac.remainder(), bc.remainder());
-    for (x, y) in ac.zip(bc) {
-        for q in 0..4 {
-            s[q] += x[q] * y[q];
-        }
-    }
-    for (x, y) in ar.iter().zip(br) {
-        s[0] += x * y;
-    }
-    (s[0] + s[1]) + (s[2] + s[3])
 }
 
 /// P·A·Pᵀ = L·D·Lᵀ of a symmetric positive definite matrix. Solves work in the permuted
@@ -755,18 +772,14 @@ impl Ldlt {
                 let vals = &self.bval[o + skip..o + l];
                 let zs = &z[(s + skip) * W..(s + l) * W];
                 if W == 1 {
-                    acc[0][0] += dot4(vals, zs);
-                } else {
-                    // Two accumulator sets break the FMA latency chain.
-                    let (v2, z2) = (vals.chunks_exact(2), zs.chunks_exact(2 * W));
-                    let (vr, zr) = (v2.remainder(), z2.remainder());
-                    for (v, zc) in v2.zip(z2) {
-                        for c in 0..W {
-                            acc[0][c] += v[0] * zc[c];
-                            acc[1][c] += v[1] * zc[W + c];
-                        }
+                    acc[0][0] += crate::simd::dot(vals, zs);
+                } else if W == 4 {
+                    let d = crate::simd::dot4_cols(vals, zs);
+                    for c in 0..W {
+                        acc[0][c] += d[c];
                     }
-                    for (v, zc) in vr.iter().zip(zr.chunks_exact(W)) {
+                } else {
+                    for (v, zc) in vals.iter().zip(zs.chunks_exact(W)) {
                         for c in 0..W {
                             acc[0][c] += v * zc[c];
                         }
@@ -802,9 +815,7 @@ impl Ldlt {
         let (zi, zb) = z.split_at_mut(pb);
         for (g, &v) in zb.iter().enumerate() {
             for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
-                for (zv, lv) in zi[s..s + l].iter_mut().zip(&self.bval[o..o + l]) {
-                    *zv -= lv * v;
-                }
+                crate::simd::axpy(&mut zi[s..s + l], &self.bval[o..o + l], -v);
             }
         }
         for k in (0..pb).rev() {
