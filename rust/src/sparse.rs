@@ -478,6 +478,14 @@ pub struct Ldlt {
     col_ptr: Vec<u32>,
     row_idx: Vec<u32>,
     l: Vec<f64>,
+    /// The interior columns in order, grouped: runs of at least `MIN_SEGMENT` consecutive
+    /// columns with entries at the same row offsets (the per-mode chains of a modal basis in
+    /// slot-major order) are segments applied as whole-vector operations; the rest are
+    /// plain columns of the arrays above.
+    units: Vec<Unit>,
+    /// Row offsets of the segments and their values (per segment offset-major, `len` each).
+    seg_off: Vec<usize>,
+    seg_val: Vec<f64>,
     /// Border rows over interior columns: row g owns runs `brow_ptr[g]..brow_ptr[g+1]`,
     /// each (first column, length, value offset into `bval`).
     brow_ptr: Vec<usize>,
@@ -488,6 +496,35 @@ pub struct Ldlt {
     d_inv: Vec<f64>,
     nnz: usize,
 }
+
+/// A group of interior columns of L.
+#[derive(Clone, Copy, Debug)]
+enum Unit {
+    /// Columns k0..k0+len with entries at rows k + seg_off[off..off + n_off] (each offset
+    /// ≥ len, so the segment's own unknowns are final before it is applied); values at
+    /// seg_val[val + q·len..].
+    Segment {
+        k0: usize,
+        len: usize,
+        off: usize,
+        n_off: usize,
+        val: usize,
+    },
+    /// Plain columns from..to.
+    Columns { from: usize, to: usize },
+}
+
+impl Unit {
+    fn end(&self) -> usize {
+        match *self {
+            Unit::Segment { k0, len, .. } => k0 + len,
+            Unit::Columns { to, .. } => to,
+        }
+    }
+}
+
+/// Shortest run of equal-pattern columns stored as a segment.
+const MIN_SEGMENT: usize = 8;
 
 /// A row of L with more than this many entries (in a trailing block of such rows) is stored
 /// as a border row.
@@ -581,6 +618,9 @@ impl Ldlt {
                 col_ptr: vec![0],
                 row_idx: vec![],
                 l: vec![],
+                units: vec![],
+                seg_off: vec![],
+                seg_val: vec![],
                 brow_ptr: vec![0],
                 brun: vec![],
                 bval: vec![],
@@ -698,6 +738,39 @@ impl Ldlt {
             l.extend(c.iter().map(|e| e.1));
             col_ptr[j + 1] = row_idx.len() as u32;
         }
+        let (mut units, mut seg_off, mut seg_val) = (Vec::new(), Vec::new(), Vec::new());
+        let offsets = |k: usize| cols[k].iter().map(move |e| e.0 - k);
+        let mut k = 0;
+        while k < pb {
+            let min_off = offsets(k).min().unwrap_or(usize::MAX);
+            let mut len = 1;
+            while k + len < pb && len < min_off && offsets(k + len).eq(offsets(k)) {
+                len += 1;
+            }
+            if len >= MIN_SEGMENT && !cols[k].is_empty() {
+                let (off, val) = (seg_off.len(), seg_val.len());
+                seg_off.extend(offsets(k));
+                for q in 0..cols[k].len() {
+                    seg_val.extend((k..k + len).map(|c| cols[c][q].1));
+                }
+                units.push(Unit::Segment {
+                    k0: k,
+                    len,
+                    off,
+                    n_off: cols[k].len(),
+                    val,
+                });
+            } else {
+                match units.last_mut() {
+                    Some(Unit::Columns { to, .. }) if *to == k => *to = k + len,
+                    _ => units.push(Unit::Columns {
+                        from: k,
+                        to: k + len,
+                    }),
+                }
+            }
+            k += len;
+        }
         let (mut brow_ptr, mut brun, mut bval) = (vec![0usize], Vec::new(), Vec::new());
         for row in &brows {
             let mut q = 0;
@@ -720,6 +793,9 @@ impl Ldlt {
             col_ptr,
             row_idx,
             l,
+            units,
+            seg_off,
+            seg_val,
             brow_ptr,
             brun,
             bval,
@@ -734,9 +810,25 @@ impl Ldlt {
         self.nnz
     }
 
-    /// Number of border rows and of border-row runs.
-    pub fn layout(&self) -> (usize, usize) {
-        (self.n - self.p, self.brun.len())
+    /// Number of border rows, border-row runs, interior segments and plain interior columns.
+    pub fn layout(&self) -> (usize, usize, usize, usize) {
+        let segs = self
+            .units
+            .iter()
+            .filter(|u| matches!(u, Unit::Segment { .. }))
+            .count();
+        let plain = self
+            .units
+            .iter()
+            .map(|u| {
+                if let Unit::Columns { from, to } = u {
+                    to - from
+                } else {
+                    0
+                }
+            })
+            .sum();
+        (self.n - self.p, self.brun.len(), segs, plain)
     }
 
     /// z ← L⁻¹·z for `W` interleaved right-hand sides, skipping columns before `start`
@@ -744,18 +836,53 @@ impl Ldlt {
     #[inline]
     pub fn forward<const W: usize>(&self, z: &mut [f64], start: usize) {
         assert_eq!(z.len(), W * self.n);
-        for k in start.min(self.p)..self.p {
-            let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
-            let mut zk = [0.0; W];
-            zk.copy_from_slice(&z[k * W..k * W + W]);
-            for p in a..b {
-                // SAFETY: p < nnz (col_ptr is monotone and ends at nnz) and every row index is
-                // < n (asserted at construction), so i·W + c < W·n = z.len().
-                unsafe {
-                    let i = *self.row_idx.get_unchecked(p) as usize;
-                    let l = *self.l.get_unchecked(p);
-                    for c in 0..W {
-                        *z.get_unchecked_mut(i * W + c) -= l * zk[c];
+        for unit in &self.units {
+            if unit.end() <= start {
+                continue;
+            }
+            match *unit {
+                Unit::Segment {
+                    k0,
+                    len,
+                    off,
+                    n_off,
+                    val,
+                } => {
+                    for q in 0..n_off {
+                        let o = self.seg_off[off + q];
+                        let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
+                        // Rows k0+o.. lie beyond the segment's own columns (o ≥ len).
+                        let (src, dst) = z.split_at_mut((k0 + o) * W);
+                        let (src, dst) = (&src[k0 * W..(k0 + len) * W], &mut dst[..len * W]);
+                        if W == 1 {
+                            for j in 0..len {
+                                dst[j] -= vals[j] * src[j];
+                            }
+                        } else {
+                            for j in 0..len {
+                                for c in 0..W {
+                                    dst[j * W + c] -= vals[j] * src[j * W + c];
+                                }
+                            }
+                        }
+                    }
+                }
+                Unit::Columns { from, to } => {
+                    for k in from.max(start)..to {
+                        let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
+                        let mut zk = [0.0; W];
+                        zk.copy_from_slice(&z[k * W..k * W + W]);
+                        for p in a..b {
+                            // SAFETY: p < nnz (col_ptr is monotone and ends at nnz) and every
+                            // row index is < n (asserted at construction), so i·W + c < W·n.
+                            unsafe {
+                                let i = *self.row_idx.get_unchecked(p) as usize;
+                                let l = *self.l.get_unchecked(p);
+                                for c in 0..W {
+                                    *z.get_unchecked_mut(i * W + c) -= l * zk[c];
+                                }
+                            }
+                        }
                     }
                 }
             }
@@ -818,25 +945,49 @@ impl Ldlt {
                 crate::simd::axpy(&mut zi[s..s + l], &self.bval[o..o + l], -v);
             }
         }
-        for k in (0..pb).rev() {
-            let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
-            let mut s = [0.0; 2];
-            let mut p = a;
-            // SAFETY: as in `forward`; interior row indices are < p = zi.len().
-            unsafe {
-                while p + 1 < b {
-                    s[0] += *self.l.get_unchecked(p)
-                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
-                    s[1] += *self.l.get_unchecked(p + 1)
-                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
-                    p += 2;
+        for unit in self.units.iter().rev() {
+            match *unit {
+                Unit::Segment {
+                    k0,
+                    len,
+                    off,
+                    n_off,
+                    val,
+                } => {
+                    for q in 0..n_off {
+                        let o = self.seg_off[off + q];
+                        let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
+                        let (dst, src) = zi.split_at_mut(k0 + o);
+                        let (dst, src) = (&mut dst[k0..k0 + len], &src[..len]);
+                        for j in 0..len {
+                            dst[j] -= vals[j] * src[j];
+                        }
+                    }
                 }
-                if p < b {
-                    s[0] += *self.l.get_unchecked(p)
-                        * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                Unit::Columns { from, to } => {
+                    for k in (from..to).rev() {
+                        let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
+                        let mut s = [0.0; 2];
+                        let mut p = a;
+                        // SAFETY: as in `forward`; interior row indices are < p = zi.len().
+                        unsafe {
+                            while p + 1 < b {
+                                s[0] += *self.l.get_unchecked(p)
+                                    * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                                s[1] += *self.l.get_unchecked(p + 1)
+                                    * *zi
+                                        .get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
+                                p += 2;
+                            }
+                            if p < b {
+                                s[0] += *self.l.get_unchecked(p)
+                                    * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                            }
+                        }
+                        zi[k] -= s[0] + s[1];
+                    }
                 }
             }
-            zi[k] -= s[0] + s[1];
         }
     }
 
