@@ -314,7 +314,7 @@ def _damping_from_plain(v, path: str) -> Damping:
         raise config_error(path, v, "expected a table with kind = \"ratio\" or \"coefficients\"")
     d = dict(v)
     kind = d.pop("kind", "ratio" if "ratio" in d else "coefficients")
-    cls = {"ratio": RayleighRatio, "coefficients": RayleighCoefficients}.get(kind)
+    cls = {"ratio": RayleighRatio, "coefficients": RayleighCoefficients}.get(kind) if isinstance(kind, str) else None
     if cls is None:
         raise config_error(f"{path}.kind", kind, "must be \"ratio\" or \"coefficients\"")
     return _from_plain(cls, d, path)
