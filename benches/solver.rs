@@ -1,6 +1,7 @@
 //! Solver timing (`cargo bench`): one run of the article's case (vtb.paper_config(): 160 m,
 //! one car, 80 m/s, Δt = 5e−5 s, ≈ 34 500 steps) on one core, with the irregularity sample
-//! the Python preset generates (benches/data, written by benches/make_fixture.py).
+//! the Python preset generates (benches/data, written by benches/make_fixture.py): the modal
+//! model and the conventional finite-element reference (251 elements per layer).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::Path;
@@ -37,6 +38,15 @@ fn bench_paper(c: &mut Criterion) {
     let model = Model::new(presets::paper(), profile.clone()).unwrap();
     g.bench_function("modal_time_stepping_only", |b| {
         b.iter(|| Simulation::new(&model).unwrap().run(None).unwrap())
+    });
+    let mut fem = presets::paper();
+    fem.discretisation.method = vtb::config::Method::Fem;
+    fem.discretisation.fem_elements = 251;
+    g.bench_function("fem251_full_run", |b| {
+        b.iter(|| {
+            let model = Model::new(fem.clone(), profile.clone()).unwrap();
+            Simulation::new(&model).unwrap().run(None).unwrap()
+        })
     });
     g.finish();
 }

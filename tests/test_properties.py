@@ -154,6 +154,7 @@ def test_random_bad_input_raises_only_vtb_errors(data):
         (lambda c: setattr(c.solver, "t_end", 5.0), "vehicles[0].x_front"),
         (lambda c: setattr(c, "speed", -80.0), "speed"),
         (lambda c: setattr(c.irregularity, "wavelength_min", 0.005), "irregularity.wavelength_min"),
+        (lambda c: setattr(c.irregularity, "seed", -5), "irregularity.seed"),
         (lambda c: setattr(c.structure.couplings[0], "upper", "nope"), "structure.couplings[0].upper"),
         (lambda c: setattr(c.output, "points", [500.0]), "output.points[0]"),
     ],

@@ -249,8 +249,8 @@ class Irregularity:
                 raise config_error(f"{p}.wavelength_max", self.wavelength_max, f"must exceed wavelength_min = {self.wavelength_min}")
             if self.method not in ("ifft", "spectral"):
                 raise config_error(f"{p}.method", self.method, "must be \"ifft\" or \"spectral\"")
-            if not isinstance(self.seed, (int, np.integer)) or isinstance(self.seed, bool):
-                raise config_error(f"{p}.seed", self.seed, "must be an integer")
+            if not isinstance(self.seed, (int, np.integer)) or isinstance(self.seed, bool) or self.seed < 0:
+                raise config_error(f"{p}.seed", self.seed, "must be a non-negative integer")
             if self.method == "spectral" and (not isinstance(self.n_freq, int) or self.n_freq < 1):
                 raise config_error(f"{p}.n_freq", self.n_freq, "must be a positive integer")
             if self.kind == "sato":

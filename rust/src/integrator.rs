@@ -20,12 +20,52 @@
 //! forward-substituted together with the right-hand side and one backward substitution of
 //! the combined right-hand side finishes the step.
 
+use crate::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::basis::Shape;
 use crate::error::Result;
 use crate::sparse::{CsrMatrix, Ldlt, SymOperator};
 
 /// Port columns processed together (one car: four wheelsets).
 pub const GW: usize = 4;
+/// Port vectors with at most this many entries use cached columns of A⁻¹.
+const COLUMN_PORTS_MAX_LEN: usize = 16;
+/// Cached columns kept before unused ones are dropped.
+const COLUMN_CACHE: usize = 256;
+/// Entries of a cached column of A⁻¹ below this fraction of its largest are dropped: they lie
+/// below the rounding of every sum they enter. A = 2M + Δt·C + (Δt²/2)·K is dominated by its
+/// mass part, so its inverse decays geometrically away from the diagonal (finite elements:
+/// about tenfold per node at Δt = 5e-5 s) and a column shrinks to a window of a few dozen nodes.
+const COLUMN_DROP: f64 = 1.0 / (1u64 << 60) as f64;
+
+/// A column of A⁻¹ restricted to the window `start..start + values.len()` outside which its
+/// entries are negligible (`COLUMN_DROP`).
+#[derive(Clone, Debug)]
+struct Column {
+    start: usize,
+    values: Vec<f64>,
+}
+
+impl Column {
+    fn new(full: &[f64]) -> Self {
+        let big = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let keep = |v: &f64| v.abs() > COLUMN_DROP * big;
+        let start = full.iter().position(keep).unwrap_or(0);
+        let end = full.iter().rposition(keep).map_or(start, |e| e + 1);
+        Self {
+            start,
+            values: full[start..end].to_vec(),
+        }
+    }
+
+    /// vᵀ·column.
+    fn dot(&self, v: &SVec) -> f64 {
+        v.idx
+            .iter()
+            .zip(&v.val)
+            .filter_map(|(&i, &x)| self.values.get(i.wrapping_sub(self.start)).map(|c| c * x))
+            .sum()
+    }
+}
 
 /// A sparse vector in a stepper's numbering.
 #[derive(Clone, Debug, Default)]
@@ -79,21 +119,65 @@ impl PortBlock {
     }
 }
 
+/// The factorised time-stepping matrix A and the products M·v̄, K·v̄ in one pass.
+#[derive(Clone, Debug)]
+enum Engine {
+    /// General sparse LDLᵀ (modal bases, cars).
+    Sparse { factor: Ldlt, mk: SymOperator },
+    /// Block tridiagonal (finite elements numbered node by node).
+    Blocks { factor: BlockLdlt, mk: BlockPair },
+}
+
+impl Engine {
+    /// z ← A⁻¹·z for a right-hand side that is zero before unknown `start`.
+    fn solve_from(&self, z: &mut [f64], start: usize) {
+        match self {
+            Engine::Sparse { factor, .. } => {
+                factor.forward::<1>(z, start);
+                factor.diag_backward(z);
+            }
+            Engine::Blocks { factor, .. } => factor.solve_from(z, start / factor.block_size()),
+        }
+    }
+
+    fn mul2(&self, x: &[f64], ym: &mut [f64], yk: &mut [f64]) {
+        match self {
+            Engine::Sparse { mk, .. } => mk.mul2(x, ym, yk),
+            Engine::Blocks { mk, .. } => mk.mul2(x, ym, yk),
+        }
+    }
+
+    /// The sparse factor, for forward-substituted ports (only chosen with it).
+    fn sparse(&self) -> &Ldlt {
+        match self {
+            Engine::Sparse { factor, .. } => factor,
+            Engine::Blocks { .. } => unreachable!("forward ports need the sparse factor"),
+        }
+    }
+}
+
 /// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F. Vectors, forces and
-/// observations live in the numbering of the LDLᵀ factor of A.
+/// observations live in the stepper's numbering (the elimination order of the factor of A,
+/// with padding slots for block factors).
 #[derive(Clone, Debug)]
 pub struct Newmark {
+    /// Length of stepper vectors.
     pub n: usize,
     pub dt: f64,
-    factor: Ldlt,
-    /// M and K for the products M·v̄ and K·v̄ in one pass.
-    mk: SymOperator,
+    engine: Engine,
+    /// Stepper → original index (`PAD` for padding) and original → stepper index.
+    perm: Vec<usize>,
+    inv: Vec<usize>,
     /// Displacements.
     pub u: Vec<f64>,
     q: Vec<f64>,
     s: Vec<f64>,
-    /// During a step the forward-substituted right-hand side; v̄ after `end_step`.
+    /// During a step the forward-substituted right-hand side (forward ports) or the free mean
+    /// velocity A⁻¹·b (column ports); v̄ after `end_step`.
     z: Vec<f64>,
+    /// Column ports: columns of A⁻¹ at the unknowns port vectors touch (stepper numbering),
+    /// computed on first use.
+    columns: Option<std::collections::HashMap<usize, Column>>,
     y1: Vec<f64>,
     y2: Vec<f64>,
     obs: Vec<SVec>,
@@ -103,27 +187,50 @@ pub struct Newmark {
 
 impl Newmark {
     /// `ports` lists the unknowns contact forces act on (eliminated late so that port vectors
-    /// forward-substitute cheaply).
+    /// forward-substitute cheaply); `port_len` is the number of entries of a port vector.
+    /// Short port vectors (finite elements, car wheelsets) use *column ports*: the columns of
+    /// A⁻¹ at the few unknowns they touch are cached, so a step needs one full solve and a few
+    /// axpys. Long ones (modal layers) are forward-substituted with the right-hand side.
+    /// `blocks` optionally groups the unknowns by node: if the matrices are block tridiagonal
+    /// in that grouping (finite elements), the block solver is used.
     pub fn new(
         m: &CsrMatrix,
         c: &CsrMatrix,
         k: &CsrMatrix,
         dt: f64,
         ports: &[usize],
+        port_len: usize,
+        blocks: Option<&[Vec<usize>]>,
     ) -> Result<Self> {
-        let n = m.n;
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
-        let factor = Ldlt::for_stepping(&a, ports)?;
-        let mk = SymOperator::new(&[m, k], &factor.perm);
+        let pattern = CsrMatrix::combine(&[(1.0, &a), (1.0, m), (1.0, k)]);
+        let (engine, perm, inv) = match blocks.and_then(|g| BlockLayout::new(g, &pattern)) {
+            Some(lay) => {
+                let factor = BlockLdlt::new(&BlockTri::new(&a, &lay), &lay)?;
+                let mk = BlockPair::new(&BlockTri::new(m, &lay), &BlockTri::new(k, &lay));
+                (Engine::Blocks { factor, mk }, lay.perm, lay.inv)
+            }
+            None => {
+                let factor = Ldlt::for_stepping(&a, ports)?;
+                let mk = SymOperator::new(&[m, k], &factor.perm);
+                let (perm, inv) = (factor.perm.clone(), factor.inv.clone());
+                (Engine::Sparse { factor, mk }, perm, inv)
+            }
+        };
+        let n = perm.len();
+        let column_ports =
+            port_len <= COLUMN_PORTS_MAX_LEN || matches!(engine, Engine::Blocks { .. });
         Ok(Self {
             n,
             dt,
-            factor,
-            mk,
+            engine,
+            perm,
+            inv,
             u: vec![0.0; n],
             q: vec![0.0; n],
             s: vec![0.0; n],
             z: vec![0.0; n],
+            columns: column_ports.then(std::collections::HashMap::new),
             y1: vec![0.0; n],
             y2: vec![0.0; n],
             obs: Vec::new(),
@@ -139,7 +246,7 @@ impl Newmark {
         if out.key != Some(key) {
             out.idx.clear();
             out.idx
-                .extend((0..key.1).map(|k| self.factor.inv[shape.start + k]));
+                .extend((0..key.1).map(|k| self.inv[shape.start + k]));
             out.val.resize(key.1, 0.0);
             out.key = Some(key);
         }
@@ -154,13 +261,16 @@ impl Newmark {
 
     /// A dense vector (original numbering) in the stepper's numbering.
     pub fn to_stepper(&self, x: &[f64]) -> Vec<f64> {
-        self.factor.perm.iter().map(|&i| x[i]).collect()
+        self.perm
+            .iter()
+            .map(|&i| if i == PAD { 0.0 } else { x[i] })
+            .collect()
     }
 
     /// Current displacements in the original numbering.
     pub fn displacements(&self) -> Vec<f64> {
-        let mut x = vec![0.0; self.n];
-        for (k, &i) in self.factor.perm.iter().enumerate() {
+        let mut x = vec![0.0; self.inv.len()];
+        for (i, &k) in self.inv.iter().enumerate() {
             x[i] = self.u[k];
         }
         x
@@ -179,7 +289,7 @@ impl Newmark {
     /// numbering). The acceleration only seeds the observed Newmark acceleration recursion,
     /// which carries any error in a₀ forever, so it must satisfy the equation of motion.
     pub fn set_state(&mut self, u0: &[f64], v0: &[f64], a0: &[f64], k: &CsrMatrix, m: &CsrMatrix) {
-        let n = self.n;
+        let n = self.inv.len();
         let (mut ku, mut mv) = (vec![0.0; n], vec![0.0; n]);
         k.mul(u0, &mut ku);
         m.mul(v0, &mut mv);
@@ -206,14 +316,35 @@ impl Newmark {
     /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering).
     pub fn begin_step(&mut self, f_prev: &[f64], f_next: &[f64]) {
         let h = 0.5 * self.dt;
-        for k in 0..self.n {
-            self.z[k] = self.q[k] + h * (f_prev[k] + f_next[k]);
+        for (((z, q), fp), fnx) in self.z.iter_mut().zip(&self.q).zip(f_prev).zip(f_next) {
+            *z = q + h * (fp + fnx);
         }
-        self.factor.forward::<1>(&mut self.z, 0);
+        if self.columns.is_some() {
+            self.engine.solve_from(&mut self.z, 0);
+        } else {
+            self.engine.sparse().forward::<1>(&mut self.z, 0);
+        }
     }
 
-    /// Forward-substitutes the port vectors set this step.
-    pub fn prepare_ports(&self, ports: &mut PortBlock) {
+    /// Prepares the port vectors set this step: forward substitution, or the cached columns
+    /// of A⁻¹ they need.
+    pub fn prepare_ports(&mut self, ports: &mut PortBlock) {
+        if let Some(cache) = &mut self.columns {
+            if cache.len() > COLUMN_CACHE {
+                cache.retain(|k, _| ports.vecs.iter().any(|v| v.idx.contains(k)));
+            }
+            for v in &ports.vecs {
+                for &k in &v.idx {
+                    cache.entry(k).or_insert_with(|| {
+                        let mut e = vec![0.0; self.n];
+                        e[k] = 1.0;
+                        self.engine.solve_from(&mut e, k);
+                        Column::new(&e)
+                    });
+                }
+            }
+            return;
+        }
         let s = ports.start.min(self.n);
         ports.cols[s * GW..].fill(0.0);
         ports.start = self.n;
@@ -223,12 +354,19 @@ impl Newmark {
                 ports.start = ports.start.min(i);
             }
         }
-        self.factor.forward::<GW>(&mut ports.cols, ports.start);
+        self.engine
+            .sparse()
+            .forward::<GW>(&mut ports.cols, ports.start);
     }
 
     /// Port displacements at t_{n+1} without the unknown port forces: n_cᵀ(u_n + Δt·A⁻¹·b).
     pub fn free_port_disp(&self, ports: &PortBlock) -> [f64; GW] {
-        let d = self.factor.d_inv();
+        if self.columns.is_some() {
+            return std::array::from_fn(|c| {
+                ports.vecs[c].dot(&self.u) + self.dt * ports.vecs[c].dot(&self.z)
+            });
+        }
+        let d = self.engine.sparse().d_inv();
         let mut acc = [0.0; GW];
         for k in ports.start..self.n {
             let w = d[k] * self.z[k];
@@ -242,7 +380,22 @@ impl Newmark {
 
     /// Port compliance (Δt²/2)·n_iᵀA⁻¹n_j between two port blocks (rows: `a`, cols: `b`).
     pub fn port_compliance(&self, a: &PortBlock, b: &PortBlock) -> [[f64; GW]; GW] {
-        let d = self.factor.d_inv();
+        let c2 = 0.5 * self.dt * self.dt;
+        if let Some(cache) = &self.columns {
+            // n_iᵀA⁻¹n_j = Σ_l n_j[l]·(n_iᵀ·col_l).
+            return std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    let nj = &b.vecs[j];
+                    c2 * nj
+                        .idx
+                        .iter()
+                        .zip(&nj.val)
+                        .map(|(l, v)| v * cache[l].dot(&a.vecs[i]))
+                        .sum::<f64>()
+                })
+            });
+        }
+        let d = self.engine.sparse().d_inv();
         let mut g = [[0.0; GW]; GW];
         for k in a.start.max(b.start)..self.n {
             let (ra, rb) = (&a.cols[k * GW..k * GW + GW], &b.cols[k * GW..k * GW + GW]);
@@ -253,13 +406,21 @@ impl Newmark {
                 }
             }
         }
-        let c2 = 0.5 * self.dt * self.dt;
         g.map(|row| row.map(|v| c2 * v))
     }
 
     /// Adds the port forces (Δt/2)·Σ_c w_c·n_c of the step.
     pub fn add_port_forces(&mut self, ports: &PortBlock, w: [f64; GW]) {
         let h = 0.5 * self.dt;
+        if let Some(cache) = &self.columns {
+            for (v, wc) in ports.vecs.iter().zip(w) {
+                for (l, val) in v.idx.iter().zip(&v.val) {
+                    let col = &cache[l];
+                    crate::simd::axpy(&mut self.z[col.start..], &col.values, h * wc * val);
+                }
+            }
+            return;
+        }
         for k in ports.start..self.n {
             let r = &ports.cols[k * GW..k * GW + GW];
             let mut s = 0.0;
@@ -273,8 +434,10 @@ impl Newmark {
     /// Finishes the step: back-substitution for v̄ and the state update.
     pub fn end_step(&mut self) {
         let dt = self.dt;
-        self.factor.diag_backward(&mut self.z);
-        self.mk.mul2(&self.z, &mut self.y1, &mut self.y2);
+        if self.columns.is_none() {
+            self.engine.sparse().diag_backward(&mut self.z);
+        }
+        self.engine.mul2(&self.z, &mut self.y1, &mut self.y2);
         let (u, q, sv, z, y1, y2) = (
             &mut self.u[..],
             &mut self.q[..],
@@ -333,7 +496,7 @@ mod tests {
         ] {
             let dt = ratio;
             let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
-            let mut nm = Newmark::new(&m, &c, &k, dt, &[]).unwrap();
+            let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None).unwrap();
             nm.observe(&Shape {
                 start: 0,
                 values: vec![1.0],

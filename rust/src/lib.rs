@@ -11,6 +11,7 @@
 //! println!("{:?}", result.metrics());
 //! ```
 
+pub mod banded;
 pub mod basis;
 pub mod config;
 pub mod contact;

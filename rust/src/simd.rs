@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn avx2() -> bool {
+pub(crate) fn has_avx2() -> bool {
     static HAS: OnceLock<bool> = OnceLock::new();
     *HAS.get_or_init(|| is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
 }
@@ -17,7 +17,7 @@ fn avx2() -> bool {
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2() && n >= 8 {
+    if has_avx2() && n >= 8 {
         // SAFETY: the CPU supports AVX2 and FMA (checked above); slices are length ≥ n.
         return unsafe { avx::dot(&a[..n], &b[..n]) };
     }
@@ -40,7 +40,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub fn axpy(y: &mut [f64], a: &[f64], v: f64) {
     let n = y.len().min(a.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2() && n >= 8 {
+    if has_avx2() && n >= 8 {
         // SAFETY: as in `dot`.
         return unsafe { avx::axpy(&mut y[..n], &a[..n], v) };
     }
@@ -54,7 +54,7 @@ pub fn axpy(y: &mut [f64], a: &[f64], v: f64) {
 pub fn axpy_dot(y: &mut [f64], a: &[f64], x: &[f64], v: f64) -> f64 {
     let n = y.len().min(a.len()).min(x.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2() && n >= 8 {
+    if has_avx2() && n >= 8 {
         // SAFETY: as in `dot`.
         return unsafe { avx::axpy_dot(&mut y[..n], &a[..n], &x[..n], v) };
     }
@@ -83,7 +83,7 @@ pub fn axpy_dot2(
         .min(a2.len())
         .min(x.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2() && n >= 4 {
+    if has_avx2() && n >= 4 {
         // SAFETY: as in `dot`.
         return unsafe {
             avx::axpy_dot2(&mut y1[..n], &mut y2[..n], &a1[..n], &a2[..n], &x[..n], v)
@@ -104,7 +104,7 @@ pub fn axpy_dot2(
 pub fn dot4_cols(a: &[f64], z: &[f64]) -> [f64; 4] {
     let n = a.len().min(z.len() / 4);
     #[cfg(target_arch = "x86_64")]
-    if avx2() {
+    if has_avx2() {
         // SAFETY: as in `dot`; z has at least 4n entries.
         return unsafe { avx::dot4_cols(&a[..n], &z[..4 * n]) };
     }

@@ -83,7 +83,7 @@ impl CarRun {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::new(&m, &c, &k, dt, &[])?;
+        let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None)?;
         for i in 0..N_DOF {
             nm.observe(&Shape {
                 start: i,
@@ -152,7 +152,15 @@ impl<'m> Simulation<'m> {
                 .map(|k| st.layers[0].offset + k)
                 .collect()
         };
-        let mut track = Newmark::new(&st.m, &st.c, &st.k, dt, &contact_dofs)?;
+        let mut track = Newmark::new(
+            &st.m,
+            &st.c,
+            &st.k,
+            dt,
+            &contact_dofs,
+            st.layers[0].basis.shape_len(),
+            st.node_blocks().as_deref(),
+        )?;
         for li in 0..st.layers.len() {
             for x in cfg.observation_points() {
                 track.observe(&st.shape(li, x));
@@ -187,7 +195,7 @@ impl<'m> Simulation<'m> {
             cfg.solver.contact_tol,
             cfg.solver.contact_max_iter,
         );
-        let n = st.n_dofs;
+        let n = track.n;
         let shape_len = st
             .layers
             .iter()

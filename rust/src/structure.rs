@@ -1,7 +1,7 @@
 //! The assembled track–bridge structure: layer DOFs stacked top to bottom, with mass M,
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
-use crate::basis::Shape;
+use crate::basis::{LayerBasis, Shape};
 use crate::config::{Config, CouplingKind, GROUND};
 use crate::couplings::{add_continuous, add_discrete};
 use crate::error::Result;
@@ -73,6 +73,34 @@ impl Structure {
             k: ak.finish(),
             c: ac.finish(),
         })
+    }
+
+    /// The unknowns grouped by mesh node (every layer's DOFs at node j) when all layers are
+    /// finite-element meshes of the same size: the grouping in which the matrices are block
+    /// tridiagonal.
+    pub fn node_blocks(&self) -> Option<Vec<Vec<usize>>> {
+        let meshes: Vec<usize> = self
+            .layers
+            .iter()
+            .map(|l| match &l.basis {
+                LayerBasis::Fem(f) => Some(f.n_elements),
+                LayerBasis::Modal(_) => None,
+            })
+            .collect::<Option<_>>()?;
+        let ne = *meshes.first()?;
+        if meshes.iter().any(|&m| m != ne) {
+            return None;
+        }
+        Some(
+            (0..=ne)
+                .map(|j| {
+                    self.layers
+                        .iter()
+                        .flat_map(|l| [l.offset + 2 * j, l.offset + 2 * j + 1])
+                        .collect()
+                })
+                .collect(),
+        )
     }
 
     /// Shape vector of layer `layer` at x (structure numbering), without allocating.
