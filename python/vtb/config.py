@@ -99,7 +99,14 @@ class Discretisation:
 
     method: Literal["modal", "hybrid", "fem"] = "modal"
     fem_elements: int = 251
-    omega_r: Optional[float] = None  #: FE–SEA representative frequency (rad/s); None = documented default
+    #: FE–SEA representative excitation frequency ω_r (rad/s). ``None``: the geometric centre
+    #: 2π·v/sqrt(λ_min·λ_max) of the irregularity's excitation band (a spectrum's band, or the
+    #: wavelength of a corrugation or dip), else the geometric centre of the local modes'
+    #: frequency range (docs/fesea.md).
+    omega_r: Optional[float] = None
+    #: FE–SEA global–local coupling: ``"full"`` (mass, bending and rail springs; default) or
+    #: ``"mass"`` (the article's mass-only reading).
+    fesea_coupling: Literal["full", "mass"] = "full"
 
 
 @dataclass
@@ -191,11 +198,36 @@ class Config:
         """Plain nested dict (TOML/JSON friendly; damping carries a ``kind`` tag)."""
         return _to_plain(self)
 
+    def excitation_omega_r(self) -> Optional[float]:
+        """The default ω_r (rad/s) from the irregularity: 2π·v/sqrt(λ_min·λ_max) for a
+        spectrum (the centre of its band v/λ on a log scale), 2π·v/λ for a corrugation
+        (``wavelength``) or a dip (``length``); ``None`` when there is no wavelength."""
+        irr = self.irregularity
+        from .irregularity import SPECTRA
+
+        try:
+            if irr.kind in SPECTRA:
+                lam = math.sqrt(irr.wavelength_min * irr.wavelength_max)
+            elif irr.kind == "corrugation":
+                lam = irr.wavelength
+            elif irr.kind == "cosine_dip":
+                lam = irr.length
+            else:
+                return None
+            w = 2.0 * math.pi * self.speed / lam
+        except (TypeError, ValueError, ZeroDivisionError):
+            return None
+        return w if math.isfinite(w) and w > 0 else None
+
     def to_core_json(self) -> str:
-        """JSON for the Rust core (everything but the irregularity). Non-finite numbers, which
-        JSON cannot carry, raise :class:`~vtb.errors.ConfigError` here."""
+        """JSON for the Rust core (everything but the irregularity, with the default ω_r of a
+        hybrid run resolved from it). Non-finite numbers, which JSON cannot carry, raise
+        :class:`~vtb.errors.ConfigError` here."""
         d = self.to_dict()
         d.pop("irregularity")
+        disc = d.get("discretisation")
+        if isinstance(disc, dict) and disc.get("method") == "hybrid" and disc.get("omega_r") is None:
+            disc["omega_r"] = self.excitation_omega_r()
         if d.get("tids") is None:
             d.pop("tids", None)
         _check_finite(d, "")

@@ -138,6 +138,22 @@ pub struct DiscretisationConfig {
     /// the documented default.
     #[serde(default)]
     pub omega_r: Option<f64>,
+    /// Global–local coupling of the FE–SEA correction.
+    #[serde(default)]
+    pub fesea_coupling: FeSeaCoupling,
+}
+
+/// How the FE–SEA correction couples the rail's global functions to its local modes.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FeSeaCoupling {
+    /// The exact coupling D_gj = K_gj + iωC_gj − ω²M_gj (bending and rail springs included),
+    /// split into its exact frequency-independent part and residual resonators classed by
+    /// the resonant band (docs/fesea.md).
+    #[default]
+    Full,
+    /// The article's reading: mass coupling only, D_gj ≈ −ω²M_gj (model.md §6).
+    Mass,
 }
 
 fn default_fem_elements() -> usize {
@@ -150,6 +166,7 @@ impl Default for DiscretisationConfig {
             method: Method::Modal,
             fem_elements: default_fem_elements(),
             omega_r: None,
+            fesea_coupling: FeSeaCoupling::Full,
         }
     }
 }

@@ -13,12 +13,13 @@
 //!
 //! Contact forces act through *ports*: a port of a subsystem has a force vector f (where the
 //! force enters) and a displacement vector n (what the contact sees); for the rail both are
-//! the shape vector at the wheel, for a car both are the unit vector of a wheelset DOF. The
-//! port displacements at t_{n+1} are affine in the unknown forces with the compliance
-//! (Δt²/2)·n_iᵀA⁻¹n_j, so the contact Newton iterates on the wheel forces alone.
-//! With P·A·Pᵀ = L·D·Lᵀ that compliance is (L⁻¹n_i)ᵀD⁻¹(L⁻¹n_j): the port vectors are
-//! forward-substituted together with the right-hand side and one backward substitution of
-//! the combined right-hand side finishes the step.
+//! the shape vector at the wheel (f also carries the FE–SEA force correction in the hybrid
+//! model), for a car both are the unit vector of a wheelset DOF. The port displacements at
+//! t_{n+1} are affine in the unknown forces with the compliance (Δt²/2)·n_iᵀA⁻¹f_j, so the
+//! contact Newton iterates on the wheel forces alone. With P·A·Pᵀ = L·D·Lᵀ that compliance is
+//! (L⁻¹n_i)ᵀD⁻¹(L⁻¹f_j): long (modal) port vectors are forward-substituted together with the
+//! right-hand side and one backward substitution of the combined right-hand side finishes the
+//! step; short ones use cached columns of A⁻¹.
 
 use crate::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::basis::Shape;
@@ -88,6 +89,15 @@ impl SVec {
             .sum()
     }
 
+    /// Becomes a copy of `other`, reusing the index list when it covers the same DOFs.
+    pub fn copy_from(&mut self, other: &SVec) {
+        if self.key != other.key || self.key.is_none() {
+            self.idx.clone_from(&other.idx);
+            self.key = other.key;
+        }
+        self.val.clone_from(&other.val);
+    }
+
     /// x += w·self.
     #[inline]
     pub fn add_to(&self, x: &mut [f64], w: f64) {
@@ -101,20 +111,44 @@ impl SVec {
 /// from them each step.
 #[derive(Clone, Debug)]
 pub struct PortBlock {
-    /// The port vectors (stepper coordinates).
+    /// The displacement vectors n_c (stepper coordinates): what the contact sees.
     pub vecs: [SVec; GW],
-    /// L⁻¹·P·n_c at `[k·GW + c]`.
+    /// The force vectors f_c where they differ from n_c (FE–SEA correction of the rail): same
+    /// indices as `vecs`, different values at a few of them.
+    pub force: Option<[SVec; GW]>,
+    /// L⁻¹·P·n_c at `[k·GW + c]`, and L⁻¹·P·f_c from row `fstart` on (forward ports).
     cols: Vec<f64>,
-    /// First nonzero row in elimination order.
+    cols_f: Vec<f64>,
+    /// First nonzero row in elimination order of `cols` and of `cols_f − cols`.
     start: usize,
+    fstart: usize,
 }
 
 impl PortBlock {
     pub fn new(n: usize) -> Self {
         Self {
             vecs: Default::default(),
+            force: None,
             cols: vec![0.0; n * GW],
+            cols_f: Vec::new(),
             start: n,
+            fstart: n,
+        }
+    }
+
+    /// The force vector of port c.
+    #[inline]
+    pub fn force_vec(&self, c: usize) -> &SVec {
+        self.force.as_ref().map_or(&self.vecs[c], |f| &f[c])
+    }
+
+    /// Row k of L⁻¹·P·f (forward ports).
+    #[inline]
+    fn force_row(&self, k: usize) -> &[f64] {
+        if k >= self.fstart {
+            &self.cols_f[k * GW..k * GW + GW]
+        } else {
+            &self.cols[k * GW..k * GW + GW]
         }
     }
 }
@@ -178,6 +212,9 @@ pub struct Newmark {
     /// Column ports: columns of A⁻¹ at the unknowns port vectors touch (stepper numbering),
     /// computed on first use.
     columns: Option<std::collections::HashMap<usize, Column>>,
+    /// Forward ports with force vectors: (k, L⁻¹·P·e_k from row k on) for the few unknowns k
+    /// where force and displacement vectors differ.
+    units: Vec<(usize, Vec<f64>)>,
     y1: Vec<f64>,
     y2: Vec<f64>,
     obs: Vec<SVec>,
@@ -231,6 +268,7 @@ impl Newmark {
             s: vec![0.0; n],
             z: vec![0.0; n],
             columns: column_ports.then(std::collections::HashMap::new),
+            units: Vec::new(),
             y1: vec![0.0; n],
             y2: vec![0.0; n],
             obs: Vec::new(),
@@ -333,7 +371,7 @@ impl Newmark {
             if cache.len() > COLUMN_CACHE {
                 cache.retain(|k, _| ports.vecs.iter().any(|v| v.idx.contains(k)));
             }
-            for v in &ports.vecs {
+            for v in ports.vecs.iter().chain(ports.force.iter().flatten()) {
                 for &k in &v.idx {
                     cache.entry(k).or_insert_with(|| {
                         let mut e = vec![0.0; self.n];
@@ -357,6 +395,50 @@ impl Newmark {
         self.engine
             .sparse()
             .forward::<GW>(&mut ports.cols, ports.start);
+        // L⁻¹·f = L⁻¹·n + Σ_k (f − n)_k·L⁻¹·e_k over the few entries where they differ.
+        ports.fstart = self.n;
+        let Some(force) = &ports.force else {
+            return;
+        };
+        let mut diffs = [[(0usize, 0.0f64); 8]; GW];
+        let mut nd = [0usize; GW];
+        for c in 0..GW {
+            let (n, f) = (&ports.vecs[c], &force[c]);
+            for (q, (&k, (&nv, &fv))) in n.idx.iter().zip(n.val.iter().zip(&f.val)).enumerate() {
+                debug_assert_eq!(f.idx[q], k);
+                if nv != fv {
+                    assert!(nd[c] < 8, "at most 8 corrected entries per port");
+                    diffs[c][nd[c]] = (k, fv - nv);
+                    nd[c] += 1;
+                    ports.fstart = ports.fstart.min(k);
+                }
+            }
+        }
+        let (fs, n) = (ports.fstart, self.n);
+        if fs == n {
+            return;
+        }
+        ports.cols_f.resize(n * GW, 0.0);
+        ports.cols_f[fs * GW..].copy_from_slice(&ports.cols[fs * GW..]);
+        let sparse = self.engine.sparse();
+        for c in 0..GW {
+            for &(k, d) in &diffs[c][..nd[c]] {
+                let at = match self.units.iter().position(|u| u.0 == k) {
+                    Some(at) => at,
+                    None => {
+                        let mut e = vec![0.0; n];
+                        e[k] = 1.0;
+                        sparse.forward::<1>(&mut e, k);
+                        self.units.push((k, e.split_off(k)));
+                        self.units.len() - 1
+                    }
+                };
+                let unit = &self.units[at].1;
+                for (r, u) in unit.iter().enumerate() {
+                    ports.cols_f[(k + r) * GW + c] += d * u;
+                }
+            }
+        }
     }
 
     /// Port displacements at t_{n+1} without the unknown port forces: n_cᵀ(u_n + Δt·A⁻¹·b).
@@ -378,14 +460,15 @@ impl Newmark {
         std::array::from_fn(|c| ports.vecs[c].dot(&self.u) + self.dt * acc[c])
     }
 
-    /// Port compliance (Δt²/2)·n_iᵀA⁻¹n_j between two port blocks (rows: `a`, cols: `b`).
+    /// Port compliance (Δt²/2)·n_iᵀA⁻¹f_j between two port blocks (rows: `a`, cols: `b`):
+    /// the displacement of port i per unit force of port j.
     pub fn port_compliance(&self, a: &PortBlock, b: &PortBlock) -> [[f64; GW]; GW] {
         let c2 = 0.5 * self.dt * self.dt;
         if let Some(cache) = &self.columns {
-            // n_iᵀA⁻¹n_j = Σ_l n_j[l]·(n_iᵀ·col_l).
+            // n_iᵀA⁻¹f_j = Σ_l f_j[l]·(n_iᵀ·col_l).
             return std::array::from_fn(|i| {
                 std::array::from_fn(|j| {
-                    let nj = &b.vecs[j];
+                    let nj = b.force_vec(j);
                     c2 * nj
                         .idx
                         .iter()
@@ -398,7 +481,7 @@ impl Newmark {
         let d = self.engine.sparse().d_inv();
         let mut g = [[0.0; GW]; GW];
         for k in a.start.max(b.start)..self.n {
-            let (ra, rb) = (&a.cols[k * GW..k * GW + GW], &b.cols[k * GW..k * GW + GW]);
+            let (ra, rb) = (&a.cols[k * GW..k * GW + GW], b.force_row(k));
             for r in 0..GW {
                 let ar = ra[r] * d[k];
                 for c in 0..GW {
@@ -409,11 +492,12 @@ impl Newmark {
         g.map(|row| row.map(|v| c2 * v))
     }
 
-    /// Adds the port forces (Δt/2)·Σ_c w_c·n_c of the step.
+    /// Adds the port forces (Δt/2)·Σ_c w_c·f_c of the step.
     pub fn add_port_forces(&mut self, ports: &PortBlock, w: [f64; GW]) {
         let h = 0.5 * self.dt;
         if let Some(cache) = &self.columns {
-            for (v, wc) in ports.vecs.iter().zip(w) {
+            for (c, wc) in w.into_iter().enumerate() {
+                let v = ports.force_vec(c);
                 for (l, val) in v.idx.iter().zip(&v.val) {
                     let col = &cache[l];
                     crate::simd::axpy(&mut self.z[col.start..], &col.values, h * wc * val);
@@ -422,7 +506,7 @@ impl Newmark {
             return;
         }
         for k in ports.start..self.n {
-            let r = &ports.cols[k * GW..k * GW + GW];
+            let r = ports.force_row(k);
             let mut s = 0.0;
             for c in 0..GW {
                 s += r[c] * w[c];

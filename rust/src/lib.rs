@@ -17,6 +17,7 @@ pub mod config;
 pub mod contact;
 pub mod couplings;
 pub mod error;
+pub mod fesea;
 pub mod indices;
 pub mod integrator;
 pub mod layers;

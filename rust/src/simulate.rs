@@ -4,6 +4,7 @@ use crate::basis::Shape;
 use crate::config::{Config, InitialState, Profile};
 use crate::contact::{ContactSolver, compression};
 use crate::error::{Result, VtbError};
+use crate::fesea::FeSea;
 use crate::integrator::{GW, Newmark, PortBlock};
 use crate::model::Model;
 use crate::results::{ContactLoss, RunResult};
@@ -122,6 +123,35 @@ impl CarRun {
     }
 }
 
+/// The FE–SEA force terms of the hybrid model on the rail's cubic DOFs g1..g4 (model.md §6):
+/// a load w at x adds w·a(x) + d/dt(w·b(x)) (`FeSea::load_terms`). The derivative is the
+/// backward difference over the step, F_{n+1} ∋ (H_{n+1} − H_n)/Δt with H = Σ_loads w·b(x), so
+/// every force sample is single-valued (Newmark's acceleration recursion stays consistent)
+/// and the step integral of the term is exact up to a half-step lag.
+struct RailCorrection<'m> {
+    fs: &'m FeSea,
+    /// Stepper indices of g1..g4.
+    idx: [usize; 4],
+    /// 1/Δt.
+    rate: f64,
+    /// H_n, and H_{n+1} from the known loads of the step.
+    g_prev: [f64; 4],
+    g_next: [f64; 4],
+    /// b(x) at each wheel this step.
+    wheel_r: Vec<[f64; 4]>,
+}
+
+impl RailCorrection<'_> {
+    /// The corrections of the g entries of F_{n+1} for a unit load at x: (a + b/Δt, b).
+    fn unit_load(&self, x: f64) -> ([f64; 4], [f64; 4]) {
+        self.with_rate(self.fs.load_terms(x))
+    }
+
+    fn with_rate(&self, (a, b): ([f64; 4], [f64; 4])) -> ([f64; 4], [f64; 4]) {
+        (std::array::from_fn(|g| a[g] + self.rate * b[g]), b)
+    }
+}
+
 /// The state of one coupled run.
 pub struct Simulation<'m> {
     model: &'m Model,
@@ -138,6 +168,7 @@ pub struct Simulation<'m> {
     shape: Shape,
     scratch: crate::integrator::SVec,
     n_steps: usize,
+    correction: Option<RailCorrection<'m>>,
 }
 
 impl<'m> Simulation<'m> {
@@ -202,12 +233,37 @@ impl<'m> Simulation<'m> {
             .map(|l| l.basis.shape_len())
             .max()
             .unwrap_or(0);
+        let correction = st.fesea.as_ref().map(|fs| {
+            let idx = fs.dofs.map(|d| {
+                track
+                    .vector(&Shape {
+                        start: d,
+                        values: vec![1.0],
+                    })
+                    .idx[0]
+            });
+            RailCorrection {
+                fs,
+                idx,
+                rate: 1.0 / dt,
+                g_prev: [0.0; 4],
+                g_next: [0.0; 4],
+                wheel_r: vec![[0.0; 4]; nw],
+            }
+        });
+        let mut track_ports: Vec<PortBlock> = (0..cars.len()).map(|_| PortBlock::new(n)).collect();
+        if correction.is_some() {
+            for p in &mut track_ports {
+                p.force = Some(Default::default());
+            }
+        }
         Ok(Self {
             model,
+            correction,
             f_prev: vec![0.0; n],
             f_next: vec![0.0; n],
             movers,
-            track_ports: (0..cars.len()).map(|_| PortBlock::new(n)).collect(),
+            track_ports,
             cars,
             contact,
             p: vec![0.0; nw],
@@ -221,18 +277,18 @@ impl<'m> Simulation<'m> {
         })
     }
 
-    /// f += w·N_layer(x) (stepper coordinates).
-    fn add_load(&mut self, next: bool, layer: usize, x: f64, w: f64) {
+    /// F_{n+1} += w·N_layer(x) (stepper coordinates), with the FE–SEA terms of a rail load.
+    fn add_load(&mut self, layer: usize, x: f64, w: f64) {
         self.model.structure.shape_into(layer, x, &mut self.shape);
         self.track.vector_into(&self.shape, &mut self.scratch);
-        self.scratch.add_to(
-            if next {
-                &mut self.f_next
-            } else {
-                &mut self.f_prev
-            },
-            w,
-        );
+        self.scratch.add_to(&mut self.f_next, w);
+        if let Some(rc) = self.correction.as_mut().filter(|_| layer == 0) {
+            let (f, r) = rc.unit_load(x);
+            for g in 0..4 {
+                self.f_next[rc.idx[g]] += w * f[g];
+                rc.g_next[g] += w * r[g];
+            }
+        }
     }
 
     /// Static (or rest) initial state of track and cars.
@@ -259,10 +315,21 @@ impl<'m> Simulation<'m> {
         // Track load at t = 0 in the original numbering.
         let n = st.n_dofs;
         let mut f0 = vec![0.0; n];
+        // With the FE–SEA correction the initial state is the equilibrium of the corrected
+        // model under the corrected loads; H_{−1} = H_0 (no derivative term at the start).
+        let mut g0 = [0.0; 4];
+        let correction = self.correction.as_ref();
         let mut add = |layer: usize, x: f64, w: f64| {
             let s = st.shape(layer, x);
             for (k, v) in s.values.iter().enumerate() {
                 f0[s.start + k] += w * v;
+            }
+            if let Some(rc) = correction.filter(|_| layer == 0) {
+                let (a, b) = rc.fs.load_terms(x);
+                for g in 0..4 {
+                    f0[rc.fs.dofs[g]] += w * a[g];
+                    g0[g] += w * b[g];
+                }
             }
         };
         for m in &self.movers {
@@ -272,6 +339,9 @@ impl<'m> Simulation<'m> {
             for w in 0..N_WHEELS {
                 add(0, c.car.wheel_x0[w], loads[ci * N_WHEELS + w]);
             }
+        }
+        if let Some(rc) = self.correction.as_mut() {
+            rc.g_prev = g0;
         }
         self.f_prev = self.track.to_stepper(&f0);
         let u0 = match cfg.solver.initial_state {
@@ -330,16 +400,36 @@ impl<'m> Simulation<'m> {
             }
             let t1 = (step + 1) as f64 * dt;
             self.f_next.fill(0.0);
+            if let Some(rc) = self.correction.as_mut() {
+                rc.g_next = [0.0; 4];
+                for g in 0..4 {
+                    self.f_next[rc.idx[g]] -= rc.rate * rc.g_prev[g];
+                }
+            }
             for mi in 0..self.movers.len() {
                 let m = self.movers[mi];
-                self.add_load(true, m.layer, m.x0 + v * t1, m.magnitude);
+                self.add_load(m.layer, m.x0 + v * t1, m.magnitude);
             }
             self.track.begin_step(&self.f_prev, &self.f_next);
             for (ci, c) in self.cars.iter_mut().enumerate() {
                 let ports = &mut self.track_ports[ci];
+                let xs: [f64; N_WHEELS] = std::array::from_fn(|w| c.car.wheel_x0[w] + v * t1);
+                let terms = self.correction.as_ref().map(|rc| rc.fs.load_terms_at(xs));
                 for w in 0..N_WHEELS {
-                    st.shape_into(0, c.car.wheel_x0[w] + v * t1, &mut self.shape);
+                    st.shape_into(0, xs[w], &mut self.shape);
                     self.track.vector_into(&self.shape, &mut ports.vecs[w]);
+                    if let (Some(rc), Some(force), Some(t)) =
+                        (self.correction.as_mut(), ports.force.as_mut(), terms)
+                    {
+                        let (f, r) = rc.with_rate(t[w]);
+                        let fv = &mut force[w];
+                        fv.copy_from(&ports.vecs[w]);
+                        // A modal rail's shape vector covers all its DOFs, g1..g4 first.
+                        for g in 0..4 {
+                            fv.val[rc.fs.dofs[g] - self.shape.start] += f[g];
+                        }
+                        rc.wheel_r[ci * N_WHEELS + w] = r;
+                    }
                 }
                 self.track.prepare_ports(ports);
                 c.nm.begin_step(&c.f_prev, &c.gravity);
@@ -392,7 +482,17 @@ impl<'m> Simulation<'m> {
             std::mem::swap(&mut self.f_prev, &mut self.f_next);
             for (ci, ports) in self.track_ports.iter().enumerate() {
                 for w in 0..N_WHEELS {
-                    ports.vecs[w].add_to(&mut self.f_prev, self.p[ci * N_WHEELS + w]);
+                    ports
+                        .force_vec(w)
+                        .add_to(&mut self.f_prev, self.p[ci * N_WHEELS + w]);
+                }
+            }
+            if let Some(rc) = self.correction.as_mut() {
+                rc.g_prev = rc.g_next;
+                for (wi, r) in rc.wheel_r.iter().enumerate() {
+                    for g in 0..4 {
+                        rc.g_prev[g] += self.p[wi] * r[g];
+                    }
                 }
             }
             for wi in 0..nw {

@@ -2,9 +2,10 @@
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
 use crate::basis::{LayerBasis, Shape};
-use crate::config::{Config, CouplingKind, GROUND};
+use crate::config::{Config, CouplingKind, GROUND, Method};
 use crate::couplings::{add_continuous, add_discrete};
 use crate::error::Result;
+use crate::fesea::FeSea;
 use crate::layers::{Derivative, Layer, gram_blocks};
 use crate::sparse::{Assembler, CsrMatrix};
 
@@ -16,6 +17,8 @@ pub struct Structure {
     pub m: CsrMatrix,
     pub k: CsrMatrix,
     pub c: CsrMatrix,
+    /// The FE–SEA correction of the rail (hybrid method), already added to `m`, `k` and `c`.
+    pub fesea: Option<FeSea>,
 }
 
 impl Structure {
@@ -65,6 +68,19 @@ impl Structure {
                 }
             }
         }
+        let fesea = match method {
+            Method::Hybrid => Some(FeSea::new(cfg, &layers[0])?),
+            _ => None,
+        };
+        if let Some(fs) = &fesea {
+            for (p, &i) in fs.dofs.iter().enumerate() {
+                for (q, &j) in fs.dofs.iter().enumerate() {
+                    am.add(i, j, fs.delta_m[p][q]);
+                    ak.add(i, j, fs.delta_k[p][q]);
+                    ac.add(i, j, fs.delta_c[p][q]);
+                }
+            }
+        }
         Ok(Self {
             length: s.length,
             layers,
@@ -72,6 +88,7 @@ impl Structure {
             m: am.finish(),
             k: ak.finish(),
             c: ac.finish(),
+            fesea,
         })
     }
 
@@ -104,13 +121,25 @@ impl Structure {
     }
 
     /// Shape vector of layer `layer` at x (structure numbering), without allocating.
+    /// The rail (layer 0) of a hybrid model uses the FE–SEA-corrected cubic functions g̃.
     #[inline]
     pub fn shape_into(&self, layer: usize, x: f64, out: &mut Shape) {
         self.layers[layer].shape_into(x, out);
+        if layer == 0
+            && let Some(fs) = &self.fesea
+        {
+            fs.correct_shape(x, &mut out.values);
+        }
     }
 
     pub fn shape(&self, layer: usize, x: f64) -> Shape {
-        self.layers[layer].shape(x)
+        let mut s = self.layers[layer].shape(x);
+        if layer == 0
+            && let Some(fs) = &self.fesea
+        {
+            fs.correct_shape(x, &mut s.values);
+        }
+        s
     }
 
     /// Displacement u_layer(x) for a DOF vector.

@@ -230,6 +230,62 @@ fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// The FE–SEA correction of a hybrid configuration: ω_r, the resonant band, the modal
+/// density, ΔM/ΔK/ΔC on the rail's cubic DOFs and every local mode's properties.
+#[pyfunction]
+fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let Some(fs) = &model.structure.fesea else {
+        return Err(to_py_err(
+            py,
+            VtbError::config(
+                "discretisation.method",
+                format!("{:?}", model.cfg.discretisation.method).to_lowercase(),
+                "the FE–SEA correction exists for the hybrid method only",
+            ),
+        ));
+    };
+    let d = PyDict::new(py);
+    d.set_item("coupling", format!("{:?}", fs.coupling).to_lowercase())?;
+    d.set_item("omega_r", fs.omega_r)?;
+    d.set_item("band", fs.band)?;
+    d.set_item("modal_density", fs.modal_density())?;
+    d.set_item("dofs", fs.dofs.to_vec())?;
+    for (name, m) in [
+        ("delta_m", &fs.delta_m),
+        ("delta_k", &fs.delta_k),
+        ("delta_c", &fs.delta_c),
+    ] {
+        d.set_item(name, m.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?;
+    }
+    let modes = PyDict::new(py);
+    let col =
+        |f: &dyn Fn(&vtb::fesea::LocalMode) -> f64| fs.modes.iter().map(f).collect::<Vec<f64>>();
+    modes.set_item(
+        "index",
+        fs.modes.iter().map(|m| m.index as i64).collect::<Vec<_>>(),
+    )?;
+    modes.set_item("frequency", PyArray1::from_vec(py, col(&|m| m.frequency)))?;
+    modes.set_item("omega", PyArray1::from_vec(py, col(&|m| m.omega)))?;
+    modes.set_item("mass", PyArray1::from_vec(py, col(&|m| m.mass)))?;
+    modes.set_item("stiffness", PyArray1::from_vec(py, col(&|m| m.stiffness)))?;
+    modes.set_item("damping", PyArray1::from_vec(py, col(&|m| m.damping)))?;
+    modes.set_item(
+        "loss_factor",
+        PyArray1::from_vec(py, col(&|m| m.loss_factor)),
+    )?;
+    modes.set_item(
+        "class",
+        fs.modes
+            .iter()
+            .map(|m| format!("{:?}", m.class).to_lowercase())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item("modes", modes)?;
+    Ok(d)
+}
+
 /// Runs one configuration; returns a dict of histories and metrics.
 #[pyfunction]
 #[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
@@ -327,6 +383,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(matrices, m)?)?;
+    m.add_function(wrap_pyfunction!(fesea, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
