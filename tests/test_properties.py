@@ -45,13 +45,18 @@ def structures(draw, methods=("modal",)):
     cfg = Config(structure=Structure(length, layers, couplings), speed=10.0, forces=[MovingForce(1e4, 0.0)])
     cfg.discretisation.method = method
     cfg.discretisation.fem_elements = draw(st.integers(2, 30))
+    if method == "hybrid":
+        layers[0].local_modes = draw(st.integers(1, 20))
+        cfg.discretisation.omega_r = draw(st.floats(2 * np.pi * 10.0, 2 * np.pi * 5000.0))
+        cfg.discretisation.fesea_coupling = draw(st.sampled_from(["full", "mass"]))
     return cfg
 
 
-@settings(max_examples=60, deadline=None)
-@given(structures())
+@settings(max_examples=90, deadline=None)
+@given(structures(methods=("modal", "hybrid", "fem")))
 def test_assembled_matrices_are_symmetric_and_definite(cfg):
-    """M symmetric positive definite; K and C symmetric positive semi-definite."""
+    """M symmetric positive definite; K and C symmetric positive semi-definite, for every
+    discretisation, the FE–SEA corrections included."""
     mats = vtb.assembled_matrices(cfg)
     for name in ("m", "k", "c"):
         a = mats[name]

@@ -99,6 +99,9 @@ pub struct FeSea {
     pub delta_m: [[f64; 4]; 4],
     pub delta_k: [[f64; 4]; 4],
     pub delta_c: [[f64; 4]; 4],
+    /// `Full`: the part of ΔM, ΔK, ΔC that is the change g → g̃ itself (mode by mode; the
+    /// assembled structure applies that change exactly instead, see [`FeSea::shape_terms`]).
+    pub exact: [[[f64; 4]; 4]; 3],
     /// `Full`: (j, −M_gj/m_j): the cubic functions with their local content removed,
     /// g̃ = g − Σ_j (M_gj/m_j)·s_j, the rail's shape functions for displacements and loads.
     shape_terms: Vec<(usize, [f64; 4])>,
@@ -240,6 +243,7 @@ impl FeSea {
         let mut delta_k = [[0.0; 4]; 4];
         let mut delta_c = [[0.0; 4]; 4];
         let (mut terms_a, mut terms_b, mut shape_terms) = (Vec::new(), Vec::new(), Vec::new());
+        let mut exact = [[[0.0; 4]; 4]; 3];
         for l in &mut locals {
             let md = &mut l.mode;
             md.class = if md.omega < band.0 {
@@ -268,8 +272,9 @@ impl FeSea {
                 FeSeaCoupling::Full => {
                     // The exact part: g → g̃ = g − (M_gj/m_j)·s_j.
                     let (kg, cg) = (&l.k, &l.c);
-                    add(&mut delta_m, outer(mg, mg, -1.0 / mm));
-                    for (delta, xg, xj) in [(&mut delta_k, kg, kk), (&mut delta_c, cg, cc)] {
+                    add(&mut exact[0], outer(mg, mg, -1.0 / mm));
+                    let [_, ek, ec] = &mut exact;
+                    for (delta, xg, xj) in [(ek, kg, kk), (ec, cg, cc)] {
                         add(delta, outer(xg, mg, -1.0 / mm));
                         add(delta, outer(mg, xg, -1.0 / mm));
                         add(delta, outer(mg, mg, xj / (mm * mm)));
@@ -304,6 +309,12 @@ impl FeSea {
                 terms_b.push((md.index, b));
             }
         }
+        for (delta, e) in [&mut delta_m, &mut delta_k, &mut delta_c]
+            .into_iter()
+            .zip(exact)
+        {
+            add(delta, e);
+        }
         let length = cfg.structure.length;
         Ok(Self {
             coupling,
@@ -314,12 +325,18 @@ impl FeSea {
             delta_m,
             delta_k,
             delta_c,
+            exact,
             shape_terms,
             terms_a,
             terms_b,
             length,
             scale: (2.0 / (rail.rho_a * length)).sqrt(),
         })
+    }
+
+    /// (j, t_j) with g̃ = g + Σ_j t_j·s_j (`Full` coupling; empty for the article's reading).
+    pub fn shape_terms(&self) -> &[(usize, [f64; 4])] {
+        &self.shape_terms
     }
 
     /// Adds g̃(x) − g(x) to the cubic entries (the first four values) of a rail shape vector:
@@ -376,6 +393,20 @@ impl FeSea {
             }
         }
         out
+    }
+
+    /// s_j(x) of every local mode, in `modes` order (consecutive sine indices).
+    pub fn local_sines_into(&self, x: f64, out: &mut [f64]) {
+        let Some(first) = self.modes.first().map(|m| m.index) else {
+            return;
+        };
+        let th = PI * x / self.length;
+        let two_c = 2.0 * th.cos();
+        let (mut prev, mut cur) = (((first - 1) as f64 * th).sin(), (first as f64 * th).sin());
+        for o in out.iter_mut().take(self.modes.len()) {
+            *o = self.scale * cur;
+            (prev, cur) = (cur, two_c * cur - prev);
+        }
     }
 
     /// Number of local modes in the resonant band over its width (modes per rad/s).

@@ -139,6 +139,14 @@ struct RailCorrection<'m> {
     g_next: [f64; 4],
     /// b(x) at each wheel this step.
     wheel_r: Vec<[f64; 4]>,
+    /// Static flexibility of the local modes (mode-acceleration recovery): 1/k_j, and
+    /// s_j(x_o)/k_j at each rail observation point.
+    inv_k: Vec<f64>,
+    obs: Vec<Vec<f64>>,
+    /// s_j at each wheel, then at each moving force on the rail, this step (row-major).
+    sines: Vec<f64>,
+    /// (x0, magnitude) of the moving forces on the rail.
+    movers: Vec<(f64, f64)>,
 }
 
 impl RailCorrection<'_> {
@@ -150,6 +158,37 @@ impl RailCorrection<'_> {
     fn with_rate(&self, (a, b): ([f64; 4], [f64; 4])) -> ([f64; 4], [f64; 4]) {
         (std::array::from_fn(|g| a[g] + self.rate * b[g]), b)
     }
+
+    fn row(&self, r: usize) -> &[f64] {
+        let nl = self.inv_k.len();
+        &self.sines[r * nl..(r + 1) * nl]
+    }
+
+    /// Sine rows at time t: the wheels (x0 + v·t), then the rail's moving forces.
+    fn set_rows(&mut self, wheel_x0: impl Iterator<Item = f64>, v: f64, t: f64) {
+        let nl = self.inv_k.len();
+        let Self {
+            fs, sines, movers, ..
+        } = self;
+        for (r, x) in wheel_x0.chain(movers.iter().map(|m| m.0)).enumerate() {
+            fs.local_sines_into(x + v * t, &mut sines[r * nl..(r + 1) * nl]);
+        }
+    }
+
+    /// The local modes' static deflection at rail observation point `j` under the wheel
+    /// forces `p` and the rail's moving forces (output only: in the contact this static
+    /// flexibility would replace the local modes' mass-like behaviour at ω_r, docs/fesea.md).
+    fn observed_deflection(&self, j: usize, p: &[f64]) -> f64 {
+        let loads = p.iter().copied().chain(self.movers.iter().map(|m| m.1));
+        loads
+            .enumerate()
+            .map(|(r, w)| w * dot(&self.obs[j], self.row(r)))
+            .sum()
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The state of one coupled run.
@@ -197,7 +236,7 @@ impl<'m> Simulation<'m> {
                 track.observe(&st.shape(li, x));
             }
         }
-        let movers = cfg
+        let movers: Vec<Mover> = cfg
             .forces
             .iter()
             .map(|f| Mover {
@@ -233,6 +272,11 @@ impl<'m> Simulation<'m> {
             .map(|l| l.basis.shape_len())
             .max()
             .unwrap_or(0);
+        let rail_movers: Vec<(f64, f64)> = movers
+            .iter()
+            .filter(|m: &&Mover| m.layer == 0)
+            .map(|m| (m.x0, m.magnitude))
+            .collect();
         let correction = st.fesea.as_ref().map(|fs| {
             let idx = fs.dofs.map(|d| {
                 track
@@ -249,6 +293,21 @@ impl<'m> Simulation<'m> {
                 g_prev: [0.0; 4],
                 g_next: [0.0; 4],
                 wheel_r: vec![[0.0; 4]; nw],
+                inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
+                obs: cfg
+                    .observation_points()
+                    .iter()
+                    .map(|&x| {
+                        let mut s = vec![0.0; fs.modes.len()];
+                        fs.local_sines_into(x, &mut s);
+                        s.iter()
+                            .zip(&fs.modes)
+                            .map(|(s, m)| s / m.stiffness)
+                            .collect()
+                    })
+                    .collect(),
+                sines: vec![0.0; (nw + rail_movers.len()) * fs.modes.len()],
+                movers: rail_movers,
             }
         });
         let mut track_ports: Vec<PortBlock> = (0..cars.len()).map(|_| PortBlock::new(n)).collect();
@@ -352,6 +411,9 @@ impl<'m> Simulation<'m> {
         };
         let a0 = accelerations(&st.m, &st.k, &u0, &f0)?;
         self.track.set_state(&u0, &vec![0.0; n], &a0, &st.k, &st.m);
+        if let Some(rc) = self.correction.as_mut() {
+            rc.set_rows(self.cars.iter().flat_map(|c| c.car.wheel_x0), 0.0, 0.0);
+        }
         for (ci, c) in self.cars.iter_mut().enumerate() {
             let mut zw = [0.0; N_WHEELS];
             for w in 0..N_WHEELS {
@@ -411,6 +473,9 @@ impl<'m> Simulation<'m> {
                 self.add_load(m.layer, m.x0 + v * t1, m.magnitude);
             }
             self.track.begin_step(&self.f_prev, &self.f_next);
+            if let Some(rc) = self.correction.as_mut() {
+                rc.set_rows(self.cars.iter().flat_map(|c| c.car.wheel_x0), v, t1);
+            }
             for (ci, c) in self.cars.iter_mut().enumerate() {
                 let ports = &mut self.track_ports[ci];
                 let xs: [f64; N_WHEELS] = std::array::from_fn(|w| c.car.wheel_x0[w] + v * t1);
@@ -548,6 +613,12 @@ impl<'m> Simulation<'m> {
             let (u, _, a) = self.track.observed(j);
             res.disp[step * no + j] = u;
             res.acc[step * no + j] = a;
+        }
+        if let Some(rc) = &self.correction {
+            // Rail points come first: add the local modes' static deflection.
+            for j in 0..rc.obs.len() {
+                res.disp[step * no + j] += rc.observed_deflection(j, &self.p);
+            }
         }
         let ncars = self.cars.len();
         for (ci, c) in self.cars.iter().enumerate() {
