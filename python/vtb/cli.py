@@ -53,6 +53,18 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def cmd_validate(args) -> int:
+    from .validation import run_study, write_report
+
+    cases = run_study(progress=not args.no_progress)
+    write_report(cases, args.out)
+    for c in cases:
+        print(f"{c.label:<42} {c.seconds:6.2f} s  rail {c.values['rail_disp'] * 1e3:.4f} mm {c.values['rail_acc']:.1f} m/s²  "
+              f"slab {c.values['slab_disp'] * 1e3:.4f} mm {c.values['slab_acc']:.3f} m/s²")
+    print(f"# wrote {args.out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vtb", description="Vehicle–track–bridge vertical dynamics.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -61,6 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", help="directory for result.npz, metrics.json, config.toml and a plot")
     s.add_argument("--no-plot", action="store_true", help="do not write histories.png")
     s.set_defaults(func=cmd_simulate)
+    v = sub.add_parser("validate", help="the FE–SEA validation study: hybrid, modal and FEM runs of the article's case, as a Markdown table")
+    v.add_argument("--out", default="docs/validation.md", help="Markdown page to write (default: docs/validation.md)")
+    v.add_argument("--no-progress", action="store_true", help="no progress bar")
+    v.set_defaults(func=cmd_validate)
     return p
 
 
