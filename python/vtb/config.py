@@ -107,6 +107,9 @@ class Discretisation:
     #: FE–SEA global–local coupling: ``"full"`` (mass, bending and rail springs; default) or
     #: ``"mass"`` (the article's mass-only reading).
     fesea_coupling: Literal["full", "mass"] = "full"
+    #: Hybrid: add the local modes' static deflection under the rail loads to the rail's
+    #: displacement outputs (docs/fesea.md). ``False`` follows model.md §6 literally.
+    local_deflection: bool = True
 
 
 @dataclass

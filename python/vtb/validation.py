@@ -37,6 +37,7 @@ class Case:
     coupling: str = "full"
     omega_factor: float = 1.0
     dt: Optional[float] = None
+    local_deflection: bool = True
     values: dict = field(default_factory=dict)
     seconds: float = float("nan")
 
@@ -51,6 +52,7 @@ class Case:
         rail.local_modes = self.local_modes if self.method == "hybrid" else 0
         if self.method == "hybrid":
             d.omega_r = base.excitation_omega_r() * self.omega_factor
+        d.local_deflection = self.local_deflection
         if self.dt is not None:
             cfg.solver.dt = self.dt
         return cfg
@@ -63,6 +65,7 @@ def default_cases() -> list[Case]:
     return [
         Case("modal 120", "modal"),
         Case("hybrid 120+100", "hybrid"),
+        Case("hybrid 120+100, no deflection recovery (model.md §6)", "hybrid", local_deflection=False),
         Case("hybrid 120+100, mass coupling (article)", "hybrid", coupling="mass"),
         Case("modal 220", "modal", rail_modes=220),
         Case("FEM 251", "fem", fem_elements=251),

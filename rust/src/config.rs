@@ -141,6 +141,14 @@ pub struct DiscretisationConfig {
     /// Global–local coupling of the FE–SEA correction.
     #[serde(default)]
     pub fesea_coupling: FeSeaCoupling,
+    /// Add the local modes' static deflection to the hybrid rail's displacement outputs
+    /// (docs/fesea.md; model.md §6 leaves it out, `false` follows it).
+    #[serde(default = "default_true")]
+    pub local_deflection: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// How the FE–SEA correction couples the rail's global functions to its local modes.
@@ -167,6 +175,7 @@ impl Default for DiscretisationConfig {
             fem_elements: default_fem_elements(),
             omega_r: None,
             fesea_coupling: FeSeaCoupling::Full,
+            local_deflection: true,
         }
     }
 }

@@ -296,6 +296,9 @@ impl<'m> Simulation<'m> {
                 inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
                 obs: cfg
                     .observation_points()
+                    .into_iter()
+                    .filter(|_| cfg.discretisation.local_deflection)
+                    .collect::<Vec<_>>()
                     .iter()
                     .map(|&x| {
                         let mut s = vec![0.0; fs.modes.len()];
