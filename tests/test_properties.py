@@ -45,6 +45,13 @@ def structures(draw, methods=("modal",)):
     cfg = Config(structure=Structure(length, layers, couplings), speed=10.0, forces=[MovingForce(1e4, 0.0)])
     cfg.discretisation.method = method
     cfg.discretisation.fem_elements = draw(st.integers(2, 30))
+    if n_layers >= 2 and draw(st.booleans()):
+        count = draw(st.integers(1, 4))
+        spacing = length / (count + 1)
+        cfg.tids = vtb.TIDs(
+            inertance=draw(st.floats(1e-3, 50.0)), stiffness=draw(st.floats(1e2, 1e9)), damping=draw(st.floats(0.0, 1e4)),
+            count=count, x0=draw(st.floats(0.0, spacing)), spacing=spacing, upper="l0", lower="l1",
+        )
     if method == "hybrid":
         layers[0].local_modes = draw(st.integers(1, 20))
         cfg.discretisation.omega_r = draw(st.floats(2 * np.pi * 10.0, 2 * np.pi * 5000.0))
@@ -162,6 +169,11 @@ def test_random_bad_input_raises_only_vtb_errors(data):
         (lambda c: setattr(c.irregularity, "seed", -5), "irregularity.seed"),
         (lambda c: setattr(c.structure.couplings[0], "upper", "nope"), "structure.couplings[0].upper"),
         (lambda c: setattr(c.output, "points", [500.0]), "output.points[0]"),
+        (lambda c: setattr(c, "tids", vtb.TIDs(5.0, 0.0, 1e3, 1, 80.0, 0.64)), "tids.stiffness"),
+        (lambda c: setattr(c, "tids", vtb.TIDs(-1.0, 2e8, 1e3, 1, 80.0, 0.64)), "tids.inertance"),
+        (lambda c: setattr(c, "tids", vtb.TIDs(5.0, 2e8, 1e3, 0, 80.0, 0.64)), "tids.count"),
+        (lambda c: setattr(c, "tids", vtb.TIDs(5.0, 2e8, 1e3, 3, 159.5, 0.64)), "tids.count"),
+        (lambda c: setattr(c, "tids", vtb.TIDs(5.0, 2e8, 1e3, 1, 80.0, 0.64, lower="nope")), "tids.lower"),
     ],
 )
 def test_bad_fields_are_named(mutate, field):

@@ -29,7 +29,7 @@ from .config import (
 from .errors import ConfigError, ConvergenceError, SolverError, VtbError
 from .fesea import FeSeaReport, fesea_report
 from .irregularity import Irregularity
-from .presets import crh3_car, moving_load_config, paper_config, paper_irregularity
+from .presets import crh3_car, moving_load_config, paper_config, paper_irregularity, tids_around
 from .simulate import Result, assembled_matrices, irregularity_profile, simulate, simulate_batch
 
 __all__ = [
@@ -37,5 +37,5 @@ __all__ = [
     "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "irregularity",
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car",
-    "moving_load_config", "FeSeaReport", "fesea_report", "__version__",
+    "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "__version__",
 ]

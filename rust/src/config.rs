@@ -821,7 +821,9 @@ impl Config {
 
     fn validate_tids(&self, t: &TidConfig, length: f64) -> Result<()> {
         positive("tids.inertance", t.inertance)?;
-        non_negative("tids.stiffness", t.stiffness)?;
+        // Without a spring the internal node has no static position (the inerter carries no
+        // static force): k_t → 0 is a limit, not a value.
+        positive("tids.stiffness", t.stiffness)?;
         non_negative("tids.damping", t.damping)?;
         if t.count == 0 {
             return Err(VtbError::config(

@@ -102,6 +102,12 @@ pub struct FeSea {
     /// `Full`: the part of ΔM, ΔK, ΔC that is the change g → g̃ itself (mode by mode; the
     /// assembled structure applies that change exactly instead, see [`FeSea::shape_terms`]).
     pub exact: [[[f64; 4]; 4]; 3],
+    /// `Full`: the static condensation −Σ_j c_j c_jᵀ/k_j of the modes above B (part of ΔK),
+    /// mode by mode, and those modes' sine indices. The assembled structure condenses them
+    /// together instead (their mutual coupling through discrete springs kept), which keeps K
+    /// positive semi-definite.
+    pub above_k: [[f64; 4]; 4],
+    pub above: Vec<usize>,
     /// `Full`: (j, −M_gj/m_j): the cubic functions with their local content removed,
     /// g̃ = g − Σ_j (M_gj/m_j)·s_j, the rail's shape functions for displacements and loads.
     shape_terms: Vec<(usize, [f64; 4])>,
@@ -244,6 +250,7 @@ impl FeSea {
         let mut delta_c = [[0.0; 4]; 4];
         let (mut terms_a, mut terms_b, mut shape_terms) = (Vec::new(), Vec::new(), Vec::new());
         let mut exact = [[[0.0; 4]; 4]; 3];
+        let (mut above_k, mut above) = ([[0.0; 4]; 4], Vec::new());
         for l in &mut locals {
             let md = &mut l.mode;
             md.class = if md.omega < band.0 {
@@ -296,6 +303,8 @@ impl FeSea {
                             add(&mut delta_k, outer(&c, &c, -1.0 / d));
                         } else {
                             add(&mut delta_k, outer(&c, &c, -1.0 / kk));
+                            add(&mut above_k, outer(&c, &c, -1.0 / kk));
+                            above.push(md.index);
                             add(&mut delta_m, outer(&c, &c, mm / (kk * d)));
                         }
                         a = c.map(|v| -v / d);
@@ -326,6 +335,8 @@ impl FeSea {
             delta_k,
             delta_c,
             exact,
+            above_k,
+            above,
             shape_terms,
             terms_a,
             terms_b,

@@ -20,6 +20,12 @@
 //! (L⁻¹n_i)ᵀD⁻¹(L⁻¹f_j): long (modal) port vectors are forward-substituted together with the
 //! right-hand side and one backward substitution of the combined right-hand side finishes the
 //! step; short ones use cached columns of A⁻¹.
+//!
+//! Tuned inerter dampers (`Attachment`) are not factorised with A: a damper's point shape
+//! vectors would fill the sparse factor. Its internal node is eliminated within the step
+//! (spring–dashpot α_r = Δt·c + Δt²k/2 in series with the inerter α_s = 2b), leaving the rank-one
+//! term κ·w·wᵀ on A, w = N_upper − N_lower, κ = α_rα_s/(α_r + α_s), which the Woodbury identity
+//! A⁻¹ = A₀⁻¹ − Y·S⁻¹·Yᵀ (Y = A₀⁻¹W, S = K⁻¹ + WᵀA₀⁻¹W) applies with precomputed Y.
 
 use crate::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::basis::Shape;
@@ -122,6 +128,10 @@ pub struct PortBlock {
     /// First nonzero row in elimination order of `cols` and of `cols_f − cols`.
     start: usize,
     fstart: usize,
+    /// With dampers: n_c·y_a and (S⁻¹·Yᵀ·f_c)_a, per damper a.
+    ny: Vec<[f64; GW]>,
+    sfy: Vec<[f64; GW]>,
+    fy: Vec<[f64; GW]>,
 }
 
 impl PortBlock {
@@ -133,6 +143,9 @@ impl PortBlock {
             cols_f: Vec::new(),
             start: n,
             fstart: n,
+            ny: Vec::new(),
+            sfy: Vec::new(),
+            fy: Vec::new(),
         }
     }
 
@@ -190,15 +203,102 @@ impl Engine {
     }
 }
 
+/// A tuned inerter damper (model.md §5): spring `stiffness` ∥ dashpot `damping` from the
+/// `upper` point to the internal node DOF `node`, inerter `inertance` from the node to the
+/// `lower` point (shape vectors and node in the original numbering).
+#[derive(Clone, Debug)]
+pub struct Attachment {
+    pub upper: Shape,
+    pub lower: Shape,
+    pub node: usize,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub inertance: f64,
+}
+
+/// The dampers of a stepper, in its numbering, with their Woodbury data.
+#[derive(Clone, Debug, Default)]
+struct Attached {
+    upper: Vec<SVec>,
+    lower: Vec<SVec>,
+    /// Stepper index of each internal node.
+    node: Vec<usize>,
+    /// α_r = Δt·c + Δt²k/2 and α_s = 2b (their parts of A), k and b.
+    alpha_r: Vec<f64>,
+    alpha_s: Vec<f64>,
+    k: Vec<f64>,
+    b: Vec<f64>,
+    /// Y = A₀⁻¹·w_i and, for forward ports, L⁻¹·P·w_i.
+    y: Vec<Vec<f64>>,
+    lw: Vec<Vec<f64>>,
+    /// S⁻¹ (row-major, N_t × N_t).
+    s_inv: Vec<f64>,
+    /// S⁻¹·Wᵀ·A₀⁻¹·b of the step's known right-hand side, and scratch.
+    t_free: Vec<f64>,
+    wz: Vec<f64>,
+}
+
+impl Attached {
+    fn len(&self) -> usize {
+        self.node.len()
+    }
+
+    fn w_dot(&self, i: usize, x: &[f64]) -> f64 {
+        self.upper[i].dot(x) - self.lower[i].dot(x)
+    }
+
+    /// out = S⁻¹·v.
+    fn s_solve(&self, v: &[f64], out: &mut [f64]) {
+        let n = self.len();
+        for (r, o) in out.iter_mut().enumerate() {
+            *o = (0..n).map(|c| self.s_inv[r * n + c] * v[c]).sum();
+        }
+    }
+}
+
+/// Inverse of a small symmetric positive definite matrix (Gauss–Jordan; once per run).
+fn invert_spd(a: &[f64], n: usize) -> Result<Vec<f64>> {
+    let mut m = a.to_vec();
+    let mut inv: Vec<f64> = (0..n * n)
+        .map(|k| if k % (n + 1) == 0 { 1.0 } else { 0.0 })
+        .collect();
+    for p in 0..n {
+        let d = m[p * n + p];
+        if !(d > 0.0) || !d.is_finite() {
+            return Err(crate::error::VtbError::Solver(
+                "damper coupling matrix is not positive definite".into(),
+            ));
+        }
+        for c in 0..n {
+            m[p * n + c] /= d;
+            inv[p * n + c] /= d;
+        }
+        for r in 0..n {
+            if r != p {
+                let f = m[r * n + p];
+                if f != 0.0 {
+                    for c in 0..n {
+                        m[r * n + c] -= f * m[p * n + c];
+                        inv[r * n + c] -= f * inv[p * n + c];
+                    }
+                }
+            }
+        }
+    }
+    Ok(inv)
+}
+
 /// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F. Vectors, forces and
 /// observations live in the stepper's numbering (the elimination order of the factor of A,
 /// with padding slots for block factors).
 #[derive(Clone, Debug)]
 pub struct Newmark {
-    /// Length of stepper vectors.
+    /// Length of stepper vectors: the factorised unknowns (`ns`), then the damper nodes.
     pub n: usize,
+    ns: usize,
     pub dt: f64,
     engine: Engine,
+    att: Attached,
     /// Stepper → original index (`PAD` for padding) and original → stepper index.
     perm: Vec<usize>,
     inv: Vec<usize>,
@@ -229,7 +329,9 @@ impl Newmark {
     /// A⁻¹ at the few unknowns they touch are cached, so a step needs one full solve and a few
     /// axpys. Long ones (modal layers) are forward-substituted with the right-hand side.
     /// `blocks` optionally groups the unknowns by node: if the matrices are block tridiagonal
-    /// in that grouping (finite elements), the block solver is used.
+    /// in that grouping (finite elements), the block solver is used. `attachments` are dampers
+    /// whose nodes are the DOFs after those of m, c, k (which exclude the dampers).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         m: &CsrMatrix,
         c: &CsrMatrix,
@@ -238,6 +340,7 @@ impl Newmark {
         ports: &[usize],
         port_len: usize,
         blocks: Option<&[Vec<usize>]>,
+        attachments: &[Attachment],
     ) -> Result<Self> {
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
         let pattern = CsrMatrix::combine(&[(1.0, &a), (1.0, m), (1.0, k)]);
@@ -254,13 +357,26 @@ impl Newmark {
                 (Engine::Sparse { factor, mk }, perm, inv)
             }
         };
+        let ns = perm.len();
+        let (mut perm, mut inv) = (perm, inv);
+        for (i, a) in attachments.iter().enumerate() {
+            debug_assert_eq!(
+                a.node,
+                m.n + i,
+                "damper nodes follow the factorised unknowns"
+            );
+            perm.push(a.node);
+            inv.push(ns + i);
+        }
         let n = perm.len();
         let column_ports =
             port_len <= COLUMN_PORTS_MAX_LEN || matches!(engine, Engine::Blocks { .. });
-        Ok(Self {
+        let mut nm = Self {
             n,
+            ns,
             dt,
             engine,
+            att: Attached::default(),
             perm,
             inv,
             u: vec![0.0; n],
@@ -274,7 +390,55 @@ impl Newmark {
             obs: Vec::new(),
             obs_v: Vec::new(),
             obs_a: Vec::new(),
-        })
+        };
+        nm.attach(attachments)?;
+        Ok(nm)
+    }
+
+    /// Woodbury data of the dampers: Y = A₀⁻¹W (and L⁻¹W for forward ports), S⁻¹.
+    fn attach(&mut self, attachments: &[Attachment]) -> Result<()> {
+        let (dt, ns, nt) = (self.dt, self.ns, attachments.len());
+        let mut att = Attached::default();
+        let mut kappa = Vec::with_capacity(nt);
+        for (i, a) in attachments.iter().enumerate() {
+            let (up, lo) = (self.vector(&a.upper), self.vector(&a.lower));
+            let mut e = vec![0.0; ns];
+            up.add_to(&mut e, 1.0);
+            lo.add_to(&mut e, -1.0);
+            if self.columns.is_some() {
+                self.engine.solve_from(&mut e, 0);
+            } else {
+                let f = self.engine.sparse();
+                f.forward::<1>(&mut e, 0);
+                att.lw.push(e.clone());
+                f.diag_backward(&mut e);
+            }
+            att.y.push(e);
+            att.upper.push(up);
+            att.lower.push(lo);
+            att.node.push(ns + i);
+            let (ar, as_) = (
+                dt * a.damping + 0.5 * dt * dt * a.stiffness,
+                2.0 * a.inertance,
+            );
+            att.alpha_r.push(ar);
+            att.alpha_s.push(as_);
+            att.k.push(a.stiffness);
+            att.b.push(a.inertance);
+            kappa.push(ar * as_ / (ar + as_));
+        }
+        let mut sm = vec![0.0; nt * nt];
+        for i in 0..nt {
+            for j in 0..nt {
+                sm[i * nt + j] =
+                    att.w_dot(i, &att.y[j]) + if i == j { 1.0 / kappa[i] } else { 0.0 };
+            }
+        }
+        att.s_inv = invert_spd(&sm, nt)?;
+        att.t_free = vec![0.0; nt];
+        att.wz = vec![0.0; nt];
+        self.att = att;
+        Ok(())
     }
 
     /// A shape vector (original numbering) in the stepper's numbering, into `out`.
@@ -357,16 +521,62 @@ impl Newmark {
         for (((z, q), fp), fnx) in self.z.iter_mut().zip(&self.q).zip(f_prev).zip(f_next) {
             *z = q + h * (fp + fnx);
         }
+        // Damper nodes: a_d·v̄_d = b_d + (α_r·N_upper + α_s·N_lower)ᵀv̄, eliminated.
+        let att = &self.att;
+        for i in 0..att.len() {
+            let g = self.z[att.node[i]] / (att.alpha_r[i] + att.alpha_s[i]);
+            att.upper[i].add_to(&mut self.z, att.alpha_r[i] * g);
+            att.lower[i].add_to(&mut self.z, att.alpha_s[i] * g);
+        }
+        let ns = self.ns;
         if self.columns.is_some() {
-            self.engine.solve_from(&mut self.z, 0);
+            self.engine.solve_from(&mut self.z[..ns], 0);
         } else {
-            self.engine.sparse().forward::<1>(&mut self.z, 0);
+            self.engine.sparse().forward::<1>(&mut self.z[..ns], 0);
+        }
+        if self.att.len() > 0 {
+            let mut wz = std::mem::take(&mut self.att.wz);
+            for (i, w) in wz.iter_mut().enumerate() {
+                *w = if self.columns.is_some() {
+                    self.att.w_dot(i, &self.z)
+                } else {
+                    let d = self.engine.sparse().d_inv();
+                    let lw = &self.att.lw[i];
+                    (0..ns).map(|k| lw[k] * d[k] * self.z[k]).sum()
+                };
+            }
+            let mut t = std::mem::take(&mut self.att.t_free);
+            self.att.s_solve(&wz, &mut t);
+            self.att.t_free = t;
+            self.att.wz = wz;
         }
     }
 
     /// Prepares the port vectors set this step: forward substitution, or the cached columns
     /// of A⁻¹ they need.
+    /// n_c·y_a and S⁻¹·Yᵀ·f_c of a port block (dampers only).
+    fn prepare_damper_ports(&self, ports: &mut PortBlock) {
+        let nt = self.att.len();
+        if nt == 0 {
+            return;
+        }
+        ports.ny.resize(nt, [0.0; GW]);
+        ports.sfy.resize(nt, [0.0; GW]);
+        ports.fy.resize(nt, [0.0; GW]);
+        for (a, y) in self.att.y.iter().enumerate() {
+            for c in 0..GW {
+                ports.ny[a][c] = ports.vecs[c].dot(y);
+                ports.fy[a][c] = ports.force_vec(c).dot(y);
+            }
+        }
+        for a in 0..nt {
+            let row = &self.att.s_inv[a * nt..(a + 1) * nt];
+            ports.sfy[a] = std::array::from_fn(|c| (0..nt).map(|b| row[b] * ports.fy[b][c]).sum());
+        }
+    }
+
     pub fn prepare_ports(&mut self, ports: &mut PortBlock) {
+        self.prepare_damper_ports(ports);
         if let Some(cache) = &mut self.columns {
             if cache.len() > COLUMN_CACHE {
                 cache.retain(|k, _| ports.vecs.iter().any(|v| v.idx.contains(k)));
@@ -374,7 +584,7 @@ impl Newmark {
             for v in ports.vecs.iter().chain(ports.force.iter().flatten()) {
                 for &k in &v.idx {
                     cache.entry(k).or_insert_with(|| {
-                        let mut e = vec![0.0; self.n];
+                        let mut e = vec![0.0; self.ns];
                         e[k] = 1.0;
                         self.engine.solve_from(&mut e, k);
                         Column::new(&e)
@@ -383,9 +593,9 @@ impl Newmark {
             }
             return;
         }
-        let s = ports.start.min(self.n);
+        let s = ports.start.min(self.ns);
         ports.cols[s * GW..].fill(0.0);
-        ports.start = self.n;
+        ports.start = self.ns;
         for (c, v) in ports.vecs.iter().enumerate() {
             for (&i, &val) in v.idx.iter().zip(&v.val) {
                 ports.cols[i * GW + c] = val;
@@ -394,9 +604,9 @@ impl Newmark {
         }
         self.engine
             .sparse()
-            .forward::<GW>(&mut ports.cols, ports.start);
+            .forward::<GW>(&mut ports.cols[..self.ns * GW], ports.start);
         // L⁻¹·f = L⁻¹·n + Σ_k (f − n)_k·L⁻¹·e_k over the few entries where they differ.
-        ports.fstart = self.n;
+        ports.fstart = self.ns;
         let Some(force) = &ports.force else {
             return;
         };
@@ -414,12 +624,12 @@ impl Newmark {
                 }
             }
         }
-        let (fs, n) = (ports.fstart, self.n);
+        let (fs, n) = (ports.fstart, self.ns);
         if fs == n {
             return;
         }
         ports.cols_f.resize(n * GW, 0.0);
-        ports.cols_f[fs * GW..].copy_from_slice(&ports.cols[fs * GW..]);
+        ports.cols_f[fs * GW..].copy_from_slice(&ports.cols[fs * GW..n * GW]);
         let sparse = self.engine.sparse();
         for c in 0..GW {
             for &(k, d) in &diffs[c][..nd[c]] {
@@ -443,44 +653,55 @@ impl Newmark {
 
     /// Port displacements at t_{n+1} without the unknown port forces: n_cᵀ(u_n + Δt·A⁻¹·b).
     pub fn free_port_disp(&self, ports: &PortBlock) -> [f64; GW] {
+        // Dampers: −n_cᵀ·Y·S⁻¹·WᵀA₀⁻¹b.
+        let corr: [f64; GW] = std::array::from_fn(|c| {
+            (0..self.att.len())
+                .map(|a| ports.ny[a][c] * self.att.t_free[a])
+                .sum()
+        });
         if self.columns.is_some() {
             return std::array::from_fn(|c| {
-                ports.vecs[c].dot(&self.u) + self.dt * ports.vecs[c].dot(&self.z)
+                ports.vecs[c].dot(&self.u) + self.dt * (ports.vecs[c].dot(&self.z) - corr[c])
             });
         }
         let d = self.engine.sparse().d_inv();
         let mut acc = [0.0; GW];
-        for k in ports.start..self.n {
+        for k in ports.start..self.ns {
             let w = d[k] * self.z[k];
             let r = &ports.cols[k * GW..k * GW + GW];
             for c in 0..GW {
                 acc[c] += r[c] * w;
             }
         }
-        std::array::from_fn(|c| ports.vecs[c].dot(&self.u) + self.dt * acc[c])
+        std::array::from_fn(|c| ports.vecs[c].dot(&self.u) + self.dt * (acc[c] - corr[c]))
     }
 
     /// Port compliance (Δt²/2)·n_iᵀA⁻¹f_j between two port blocks (rows: `a`, cols: `b`):
     /// the displacement of port i per unit force of port j.
     pub fn port_compliance(&self, a: &PortBlock, b: &PortBlock) -> [[f64; GW]; GW] {
         let c2 = 0.5 * self.dt * self.dt;
+        // Dampers: −n_iᵀ·Y·S⁻¹·Yᵀ·f_j.
+        let corr = |i: usize, j: usize| -> f64 {
+            (0..self.att.len()).map(|t| a.ny[t][i] * b.sfy[t][j]).sum()
+        };
         if let Some(cache) = &self.columns {
             // n_iᵀA⁻¹f_j = Σ_l f_j[l]·(n_iᵀ·col_l).
             return std::array::from_fn(|i| {
                 std::array::from_fn(|j| {
                     let nj = b.force_vec(j);
-                    c2 * nj
+                    c2 * (nj
                         .idx
                         .iter()
                         .zip(&nj.val)
                         .map(|(l, v)| v * cache[l].dot(&a.vecs[i]))
                         .sum::<f64>()
+                        - corr(i, j))
                 })
             });
         }
         let d = self.engine.sparse().d_inv();
         let mut g = [[0.0; GW]; GW];
-        for k in a.start.max(b.start)..self.n {
+        for k in a.start.max(b.start)..self.ns {
             let (ra, rb) = (&a.cols[k * GW..k * GW + GW], b.force_row(k));
             for r in 0..GW {
                 let ar = ra[r] * d[k];
@@ -489,7 +710,7 @@ impl Newmark {
                 }
             }
         }
-        g.map(|row| row.map(|v| c2 * v))
+        std::array::from_fn(|r| std::array::from_fn(|c| c2 * (g[r][c] - corr(r, c))))
     }
 
     /// Adds the port forces (Δt/2)·Σ_c w_c·f_c of the step.
@@ -505,7 +726,7 @@ impl Newmark {
             }
             return;
         }
-        for k in ports.start..self.n {
+        for k in ports.start..self.ns {
             let r = ports.force_row(k);
             let mut s = 0.0;
             for c in 0..GW {
@@ -515,13 +736,56 @@ impl Newmark {
         }
     }
 
+    /// v̄ = A⁻¹b from z = A₀⁻¹b (Woodbury), then the damper nodes' v̄_d.
+    fn finish_dampers(&mut self) {
+        let nt = self.att.len();
+        if nt == 0 {
+            return;
+        }
+        let mut wz = std::mem::take(&mut self.att.wz);
+        let mut t = std::mem::take(&mut self.att.t_free);
+        for (i, w) in wz.iter_mut().enumerate() {
+            *w = self.att.w_dot(i, &self.z);
+        }
+        self.att.s_solve(&wz, &mut t);
+        for (y, ti) in self.att.y.iter().zip(&t) {
+            crate::simd::axpy(&mut self.z[..self.ns], y, -ti);
+        }
+        let att = &self.att;
+        for i in 0..nt {
+            let d = att.node[i];
+            let h = att.alpha_r[i] * att.upper[i].dot(&self.z)
+                + att.alpha_s[i] * att.lower[i].dot(&self.z);
+            self.z[d] = (self.z[d] + h) / (att.alpha_r[i] + att.alpha_s[i]);
+        }
+        self.att.wz = wz;
+        self.att.t_free = t;
+    }
+
+    /// The dampers' parts of M·v̄ and K·v̄: b·(e_d − N_lower)(…)ᵀ and k·(N_upper − e_d)(…)ᵀ.
+    fn damper_products(&mut self) {
+        let att = &self.att;
+        for i in 0..att.len() {
+            let d = att.node[i];
+            let vm = att.b[i] * (self.z[d] - att.lower[i].dot(&self.z));
+            let vk = att.k[i] * (att.upper[i].dot(&self.z) - self.z[d]);
+            self.y1[d] = vm;
+            att.lower[i].add_to(&mut self.y1, -vm);
+            self.y2[d] = -vk;
+            att.upper[i].add_to(&mut self.y2, vk);
+        }
+    }
+
     /// Finishes the step: back-substitution for v̄ and the state update.
     pub fn end_step(&mut self) {
-        let dt = self.dt;
+        let (dt, ns) = (self.dt, self.ns);
         if self.columns.is_none() {
-            self.engine.sparse().diag_backward(&mut self.z);
+            self.engine.sparse().diag_backward(&mut self.z[..ns]);
         }
-        self.engine.mul2(&self.z, &mut self.y1, &mut self.y2);
+        self.finish_dampers();
+        self.engine
+            .mul2(&self.z[..ns], &mut self.y1[..ns], &mut self.y2[..ns]);
+        self.damper_products();
         let (u, q, sv, z, y1, y2) = (
             &mut self.u[..],
             &mut self.q[..],
@@ -580,7 +844,7 @@ mod tests {
         ] {
             let dt = ratio;
             let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
-            let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None).unwrap();
+            let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[]).unwrap();
             nm.observe(&Shape {
                 start: 0,
                 values: vec![1.0],
@@ -604,6 +868,107 @@ mod tests {
                 peak = peak.max(u.abs());
             }
             assert!(peak <= 1.0 + 1e-12);
+        }
+    }
+
+    /// The dampers' Woodbury path against the same system with the damper assembled into
+    /// M, K, C (a second method), with a linear spring acting through a port, for forward and
+    /// column ports.
+    #[test]
+    fn dampers_by_woodbury_match_assembled_matrices() {
+        let n = 5;
+        let (mut am, mut ak) = (Assembler::new(n), Assembler::new(n));
+        for i in 0..n {
+            am.add(i, i, 1.0 + i as f64);
+            ak.add(i, i, 200.0);
+            if i + 1 < n {
+                for (r, c, v) in [(i, i + 1, -80.0), (i + 1, i, -80.0), (i + 1, i + 1, 80.0)] {
+                    ak.add(r, c, v);
+                }
+                ak.add(i, i, 80.0);
+            }
+        }
+        let (m0, k0) = (am.finish(), ak.finish());
+        let c0 = CsrMatrix::combine(&[(0.3, &m0), (1e-3, &k0)]);
+        let att = Attachment {
+            upper: Shape {
+                start: 1,
+                values: vec![0.3, 0.7],
+            },
+            lower: Shape {
+                start: 4,
+                values: vec![1.0],
+            },
+            node: n,
+            stiffness: 50.0,
+            damping: 0.5,
+            inertance: 0.2,
+        };
+        // Full matrices with the node as DOF n.
+        let full = |a: &CsrMatrix, s: &Shape, w: f64| {
+            let mut asm = Assembler::new(n + 1);
+            for i in 0..n {
+                for p in a.row_ptr[i]..a.row_ptr[i + 1] {
+                    asm.add(i, a.col_idx[p], a.values[p]);
+                }
+            }
+            let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
+            dofs.push(n);
+            let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
+            v.push(1.0);
+            let block: Vec<f64> = v
+                .iter()
+                .flat_map(|p| v.iter().map(move |q| p * q))
+                .collect();
+            asm.add_block(&dofs, &block, w);
+            asm.finish()
+        };
+        let (mf, kf, cf) = (
+            full(&m0, &att.lower, att.inertance),
+            full(&k0, &att.upper, att.stiffness),
+            full(&c0, &att.upper, att.damping),
+        );
+        let port = Shape {
+            start: 0,
+            values: vec![1.0, 0.5],
+        };
+        let k_contact = 300.0;
+        let run = |nm: &mut Newmark| -> Vec<f64> {
+            nm.observe(&Shape {
+                start: 3,
+                values: vec![1.0],
+            });
+            let u0 = [0.01, -0.02, 0.0, 0.03, 0.0, 0.0];
+            nm.set_state(&u0, &[0.0; 6], &[0.0; 6], &kf, &mf);
+            let mut ports = PortBlock::new(nm.n);
+            nm.vector_into(&port, &mut ports.vecs[0]);
+            let f = vec![0.0; nm.n];
+            let mut out = Vec::new();
+            for _ in 0..300 {
+                nm.begin_step(&f, &f);
+                nm.prepare_ports(&mut ports);
+                let free = nm.free_port_disp(&ports)[0];
+                let g = nm.port_compliance(&ports, &ports)[0][0];
+                let p = -k_contact * free / (1.0 + k_contact * g);
+                nm.add_port_forces(&ports, [p, 0.0, 0.0, 0.0]);
+                nm.end_step();
+                out.push(nm.observed(0).0);
+                out.push(p);
+            }
+            out
+        };
+        for port_len in [2, 100] {
+            let mut a =
+                Newmark::new(&m0, &c0, &k0, 1e-2, &[0, 1], port_len, None, &[att.clone()]).unwrap();
+            let mut b = Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
+            let (ra, rb) = (run(&mut a), run(&mut b));
+            let scale = rb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (x, y) in ra.iter().zip(&rb) {
+                assert!(
+                    (x - y).abs() < 1e-10 * scale,
+                    "port_len {port_len}: {x} vs {y}"
+                );
+            }
         }
     }
 }

@@ -84,7 +84,7 @@ impl CarRun {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None)?;
+        let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[])?;
         for i in 0..N_DOF {
             nm.observe(&Shape {
                 start: i,
@@ -222,14 +222,16 @@ impl<'m> Simulation<'m> {
                 .map(|k| st.layers[0].offset + k)
                 .collect()
         };
+        let (m, c, k) = st.stepping_matrices();
         let mut track = Newmark::new(
-            &st.m,
-            &st.c,
-            &st.k,
+            m,
+            c,
+            k,
             dt,
             &contact_dofs,
             st.layers[0].basis.shape_len(),
             st.node_blocks().as_deref(),
+            &st.tids,
         )?;
         for li in 0..st.layers.len() {
             for x in cfg.observation_points() {

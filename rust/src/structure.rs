@@ -2,10 +2,11 @@
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
 use crate::basis::{LayerBasis, ModalBasis, Shape};
-use crate::config::{Config, CouplingKind, GROUND, Method};
+use crate::config::{Config, CouplingKind, GROUND, Method, TidConfig};
 use crate::couplings::{add_continuous, add_discrete};
 use crate::error::Result;
 use crate::fesea::FeSea;
+use crate::integrator::Attachment;
 use crate::layers::{Derivative, Layer, gram_blocks};
 use crate::sparse::{Assembler, CsrMatrix};
 
@@ -19,6 +20,12 @@ pub struct Structure {
     pub c: CsrMatrix,
     /// The FE–SEA correction of the rail (hybrid method), already added to `m`, `k` and `c`.
     pub fesea: Option<FeSea>,
+    /// The tuned inerter dampers (internal node DOFs after the layers'), included in `m`,
+    /// `k`, `c`.
+    pub tids: Vec<Attachment>,
+    /// `m`, `k`, `c` without the dampers, on the layers' DOFs: the time stepper factors these
+    /// and takes the dampers as rank-one updates (`None`: no dampers, use `m`, `k`, `c`).
+    pub base: Option<[CsrMatrix; 3]>,
 }
 
 impl Structure {
@@ -27,7 +34,8 @@ impl Structure {
         let s = &cfg.structure;
         let method = cfg.discretisation.method;
         let layers = stack(cfg, 0);
-        let n: usize = layers.iter().map(Layer::n_dofs).sum();
+        let n_layers: usize = layers.iter().map(Layer::n_dofs).sum();
+        let n = n_layers + cfg.tids.as_ref().map_or(0, |t| t.count);
         let fesea = match method {
             Method::Hybrid => Some(FeSea::new(cfg, &layers[0])?),
             _ => None,
@@ -39,7 +47,7 @@ impl Structure {
             Some(fs) if !fs.shape_terms().is_empty() => {
                 let n_local = s.layers[0].local_modes;
                 let mut full = assemble(cfg, &stack(cfg, n_local)).map(|a| a.finish().to_dense());
-                let mut out = [Assembler::new(n), Assembler::new(n), Assembler::new(n)];
+                let mut out = [(); 3].map(|_| Assembler::new(n_layers));
                 let rail_dofs = layers[0].n_dofs();
                 let ext = |r: usize| if r < rail_dofs { r } else { r + n_local };
                 // g3, g4 of a modal basis are h2, h4 minus their own sines' content, so the
@@ -53,10 +61,13 @@ impl Structure {
                 let width = ext_rail.n_dofs();
                 let r: [f64; 2] =
                     std::array::from_fn(|p| layers[0].rho_a * gram[(p + 2) * width + p + 2]);
-                for (a, asm) in full.iter_mut().zip(&mut out) {
+                for a in full.iter_mut() {
                     project(a, fs, r);
-                    for i in 0..n {
-                        for j in 0..n {
+                }
+                condense_above(&mut full[1], fs);
+                for (a, asm) in full.iter().zip(&mut out) {
+                    for i in 0..n_layers {
+                        for j in 0..n_layers {
                             let v = a[ext(i)][ext(j)];
                             if v != 0.0 {
                                 asm.add(i, j, v);
@@ -66,7 +77,10 @@ impl Structure {
                 }
                 for (k, asm) in out.iter_mut().enumerate() {
                     let total = [&fs.delta_m, &fs.delta_k, &fs.delta_c][k];
-                    add_on_cubics(asm, fs, |p, q| total[p][q] - fs.exact[k][p][q]);
+                    add_on_cubics(asm, fs, |p, q| {
+                        let above = if k == 1 { -fs.above_k[p][q] } else { 0.0 };
+                        total[p][q] - fs.exact[k][p][q] + above
+                    });
                 }
                 out
             }
@@ -79,15 +93,84 @@ impl Structure {
             }
             None => assemble(cfg, &layers),
         };
-        Ok(Self {
+        let mut structure = Self {
             length: s.length,
             layers,
             n_dofs: n,
-            m: am.finish(),
-            k: ak.finish(),
-            c: ac.finish(),
+            m: CsrMatrix::zeros(0),
+            k: CsrMatrix::zeros(0),
+            c: CsrMatrix::zeros(0),
             fesea,
-        })
+            tids: Vec::new(),
+            base: None,
+        };
+        let [m, k, c] = [am, ak, ac].map(Assembler::finish);
+        match &cfg.tids {
+            Some(t) => {
+                let mut full = [&m, &k, &c].map(|a| {
+                    let mut asm = Assembler::new(n);
+                    for i in 0..a.n {
+                        for p in a.row_ptr[i]..a.row_ptr[i + 1] {
+                            asm.add(i, a.col_idx[p], a.values[p]);
+                        }
+                    }
+                    asm
+                });
+                structure.add_tids(t, cfg, n_layers, &mut full);
+                let [fm, fk, fc] = full.map(Assembler::finish);
+                (structure.m, structure.k, structure.c) = (fm, fk, fc);
+                structure.base = Some([m, k, c]);
+            }
+            None => (structure.m, structure.k, structure.c) = (m, k, c),
+        }
+        Ok(structure)
+    }
+
+    /// (M, C, K) for the time stepper: without the dampers when there are any.
+    pub fn stepping_matrices(&self) -> (&CsrMatrix, &CsrMatrix, &CsrMatrix) {
+        match &self.base {
+            Some([m, k, c]) => (m, c, k),
+            None => (&self.m, &self.c, &self.k),
+        }
+    }
+
+    /// Tuned inerter dampers (model.md §5): DOF `first + i` is damper i's internal node; spring
+    /// and dashpot from the upper layer's point to it, inerter from it to the lower layer's
+    /// point, all through the layers' shape vectors (g̃ on a hybrid rail).
+    fn add_tids(&mut self, t: &TidConfig, cfg: &Config, first: usize, asm: &mut [Assembler; 3]) {
+        let (upper, lower) = (
+            cfg.layer_index(&t.upper).expect("validated"),
+            cfg.layer_index(&t.lower).expect("validated"),
+        );
+        for i in 0..t.count {
+            let x = t.x0 + i as f64 * t.spacing;
+            let a = Attachment {
+                upper: self.shape(upper, x),
+                lower: self.shape(lower, x),
+                node: first + i,
+                stiffness: t.stiffness,
+                damping: t.damping,
+                inertance: t.inertance,
+            };
+            let [am, ak, ac] = asm;
+            for (asm, s, w) in [
+                (am, &a.lower, a.inertance),
+                (&mut *ak, &a.upper, a.stiffness),
+                (&mut *ac, &a.upper, a.damping),
+            ] {
+                // Two-terminal element w·(e_node − N)(e_node − N)ᵀ.
+                let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
+                dofs.push(a.node);
+                let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
+                v.push(1.0);
+                let block: Vec<f64> = v
+                    .iter()
+                    .flat_map(|p| v.iter().map(move |q| p * q))
+                    .collect();
+                asm.add_block(&dofs, &block, w);
+            }
+            self.tids.push(a);
+        }
     }
 
     /// The unknowns grouped by mesh node (every layer's DOFs at node j) when all layers are
@@ -238,6 +321,48 @@ fn project(a: &mut [Vec<f64>], fs: &FeSea, r: [f64; 2]) {
         }
         for (g, rg) in r.iter().enumerate() {
             row[g + 2] *= rg;
+        }
+    }
+}
+
+/// K ← K − K_·a·K_aa⁻¹·K_a· on the projected extended stiffness: the local modes above the
+/// band condensed statically, together and with all their couplings (a Schur complement of a
+/// positive semi-definite matrix, so it stays one).
+fn condense_above(k: &mut [Vec<f64>], fs: &FeSea) {
+    let idx: Vec<usize> = fs.above.iter().map(|j| 3 + j).collect();
+    let (na, n) = (idx.len(), k.len());
+    if na == 0 {
+        return;
+    }
+    let mut l = vec![0.0; na * na];
+    for i in 0..na {
+        for j in 0..=i {
+            let mut v = k[idx[i]][idx[j]];
+            for p in 0..j {
+                v -= l[i * na + p] * l[j * na + p];
+            }
+            l[i * na + j] = if i == j {
+                v.max(f64::MIN_POSITIVE).sqrt()
+            } else {
+                v / l[j * na + j]
+            };
+        }
+    }
+    // X = L⁻¹·K_a· (na × n); the update is −XᵀX.
+    let mut x = vec![vec![0.0; n]; na];
+    for i in 0..na {
+        for c in 0..n {
+            let mut v = k[idx[i]][c];
+            for p in 0..i {
+                v -= l[i * na + p] * x[p][c];
+            }
+            x[i][c] = v / l[i * na + i];
+        }
+    }
+    let cols: Vec<usize> = (0..n).filter(|&c| x.iter().any(|r| r[c] != 0.0)).collect();
+    for &r in &cols {
+        for &c in &cols {
+            k[r][c] -= x.iter().map(|row| row[r] * row[c]).sum::<f64>();
         }
     }
 }
