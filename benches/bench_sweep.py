@@ -1,0 +1,29 @@
+"""Benchmark: the article's full TID sweep (1 840 cases + baseline) on this machine, all cores.
+
+    python benches/bench_sweep.py [--out benches/results/sweep_article.csv] [--report docs/sweep.md]
+
+Resumable (the CSV journal); the wall time printed is that of this invocation, so a fresh
+figure needs a fresh journal (--fresh).
+"""
+
+import argparse
+import time
+from pathlib import Path
+
+import vtb
+from vtb.tid_sweep import sweep_report
+
+p = argparse.ArgumentParser()
+p.add_argument("--out", default="benches/results/sweep_article.csv")
+p.add_argument("--report", default="docs/sweep.md")
+p.add_argument("--fresh", action="store_true", help="delete the journal first")
+args = p.parse_args()
+if args.fresh:
+    Path(args.out).unlink(missing_ok=True)
+cfg = vtb.paper_config()
+cfg.tids = vtb.tids_around(cfg)
+t0 = time.perf_counter()
+res = vtb.sweep(cfg, out=args.out)
+seconds = time.perf_counter() - t0
+print(f"sweep: {len(res)} runs in {seconds:.1f} s ({seconds / 60:.1f} min)")
+print(sweep_report(res, args.report, seconds=seconds))

@@ -1,0 +1,172 @@
+"""The TID sweep: parallel paths give identical results, nothing is lost, analyses by hand."""
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pytest
+
+import vtb
+from vtb import tid_sweep as sweep_mod
+from vtb.tid_sweep import COLUMNS, METRICS, SweepResult
+
+GRID = dict(b_t=[2.0, 5.0], k_t=[1e8, 2e8], c_t=[1e3])
+
+
+@pytest.fixture(scope="module")
+def short():
+    """The article's case cut to 0.15 s, observed 8 m into the bridge, two dampers there."""
+    c = vtb.paper_config()
+    c.solver.t_end = 0.15
+    c.output.points = [8.0]
+    c.tids = vtb.tids_around(c, count=2, x=8.0)
+    return c
+
+
+@pytest.fixture(scope="module")
+def reference(short):
+    return vtb.sweep(short, **GRID, progress=False)
+
+
+def _same(a, b):
+    assert len(a) == len(b)
+    for k in COLUMNS:
+        if k == "error":
+            assert list(a.columns[k]) == list(b.columns[k])
+        else:
+            np.testing.assert_array_equal(a.columns[k], b.columns[k])
+
+
+def test_grid_and_baseline(reference, short):
+    c = reference.columns
+    assert list(c["case"]) == [0, 1, 2, 3, 4]
+    assert math.isnan(c["b_t"][0]) and list(c["b_t"][1:]) == [2.0, 2.0, 5.0, 5.0]
+    assert all(e == "" for e in c["error"])
+    base = vtb.simulate(sweep_mod.case_config(short, math.nan, 0, 0)).metrics()
+    assert reference.baseline["rail_acc_max"] == base["rail_acc_max"]
+    one = vtb.simulate(sweep_mod.case_config(short, 5.0, 2e8, 1e3)).metrics()
+    assert c["rail_acc_max"][4] == one["rail_acc_max"]
+
+
+def test_article_grid_has_1840_cases():
+    assert len(sweep_mod.grid(sweep_mod.ARTICLE_B, sweep_mod.ARTICLE_K, sweep_mod.ARTICLE_C)) == 1840
+    assert sweep_mod.ARTICLE_K[:3] == (1e4, 2e4, 3e4) and sweep_mod.ARTICLE_K[-2:] == (9e8, 1e9)
+
+
+def test_process_pool_gives_identical_results(short, reference):
+    with ProcessPoolExecutor(2) as ex:
+        _same(reference, vtb.sweep(short, **GRID, executor=ex, chunk=2, progress=False))
+
+
+def test_dask_cluster_gives_identical_results(short, reference):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            _same(reference, vtb.sweep(short, **GRID, executor=client.get_executor(), chunk=2, progress=False))
+
+
+def test_killed_sweep_resumes_without_recomputing(short, reference, tmp_path, monkeypatch):
+    out = tmp_path / "sweep.csv"
+    ran = []
+    real = sweep_mod._run_chunk
+
+    def counting(config, cases, threads):
+        ran.extend(c[0] for c in cases)
+        return real(config, cases, threads)
+
+    monkeypatch.setattr(sweep_mod, "_run_chunk", counting)
+
+    def kill(done, total):
+        if done >= 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        vtb.sweep(short, **GRID, out=out, chunk=2, progress=kill)
+    first = list(ran)
+    assert first == [0, 1]
+    # A line cut short by the kill is ignored.
+    with open(out, "a") as f:
+        f.write("3,5.0,1e8")
+    ran.clear()
+    resumed = vtb.sweep(short, **GRID, out=out, chunk=2, progress=False)
+    assert ran == [2, 3, 4]
+    _same(reference, resumed)
+    ran.clear()
+    again = vtb.sweep(short, **GRID, out=out, progress=False)
+    assert ran == []
+    _same(reference, again)
+
+
+def test_failed_cases_are_recorded_and_the_sweep_goes_on(short):
+    bad = short.copy()
+    bad.solver.contact_max_iter = 1
+    bad.solver.contact_tol = 1e-300
+    r = vtb.sweep(bad, b_t=[5.0], k_t=[2e8], c_t=[1e3], progress=False)
+    assert len(r) == 2
+    assert all("ConvergenceError" in e for e in r.columns["error"])
+    assert np.isnan(r.columns["rail_acc_max"]).all()
+
+
+def test_exports(reference, tmp_path):
+    pd = pytest.importorskip("pandas")
+    reference.to_csv(tmp_path / "a.csv")
+    back = pd.read_csv(tmp_path / "a.csv", keep_default_na=False, na_values=["nan"])
+    np.testing.assert_array_equal(back["rail_acc_max"].to_numpy(), reference.columns["rail_acc_max"])
+    pytest.importorskip("pyarrow")
+    reference.to_parquet(tmp_path / "a.parquet")
+    df = pd.read_parquet(tmp_path / "a.parquet")
+    np.testing.assert_array_equal(df["k_t"].to_numpy(), reference.columns["k_t"])
+    assert list(reference.to_pandas().columns) == list(COLUMNS)
+
+
+def test_parquet_output_path_keeps_a_csv_journal(short, tmp_path):
+    pytest.importorskip("pyarrow")
+    out = tmp_path / "s.parquet"
+    vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
+    assert out.exists() and (tmp_path / "s.parquet.csv").exists()
+
+
+def test_bad_grid_names_the_field(short):
+    with pytest.raises(vtb.ConfigError, match="b_t"):
+        vtb.sweep(short, b_t=[-1.0], progress=False)
+    with pytest.raises(vtb.ConfigError, match="c_t"):
+        vtb.sweep(short, c_t=[], progress=False)
+
+
+def _synthetic():
+    """Two inertances, two stiffnesses; numbers chosen by hand."""
+    rows = [
+        (0, math.nan, math.nan, math.nan, 100.0, 10.0, 1.0, 40.0),
+        (1, 1.0, 1e6, 10.0, 90.0, 9.0, 0.9, 42.0),
+        (2, 1.0, 4e6, 10.0, 95.0, 9.5, 1.0, 39.0),
+        (3, 4.0, 1e6, 10.0, 99.0, 10.0, 1.0, 41.0),
+        (4, 4.0, 4e6, 10.0, 80.0, 8.0, 0.8, 45.0),
+    ]
+    cols = {k: np.full(len(rows), 0.0) for k in COLUMNS if k != "error"}
+    for j, r in enumerate(rows):
+        for k, v in zip(("case", "b_t", "k_t", "c_t", "rail_acc_max", "rail_acc_rms", "rail_acc_settle", "slab_acc_max"), r):
+            cols[k][j] = v
+    cols["case"] = cols["case"].astype(int)
+    cols["error"] = np.array([""] * len(rows))
+    return SweepResult(columns=cols, config=vtb.paper_config())
+
+
+def test_analyses_by_hand():
+    s = _synthetic()
+    t = s.best_per_inertance()
+    assert list(t["k_t"]) == [1e6, 4e6]
+    np.testing.assert_allclose(t["eta_rail_acc_max"], [0.10, 0.20])
+    np.testing.assert_allclose(t["eta_r"], [(0.1 + 0.1 + 0.1) / 3, (0.2 + 0.2 + 0.2) / 3])
+    np.testing.assert_allclose(t["slab_increase"], [2.0, 5.0])
+    np.testing.assert_allclose(t["slab_acc_min"], [39.0, 41.0])
+    np.testing.assert_allclose(t["working_frequency"], [math.sqrt(1e6) / (2 * math.pi), math.sqrt(1e6) / (2 * math.pi)])
+    assert s.best()["b_t"] == 4.0 and s.best()["eta_rail_acc_max"] == pytest.approx(0.2)
+    w = s.worst_slab_increase()
+    assert w["b_t"] == 4.0 and w["increase"] == 5.0 and w["relative"] == pytest.approx(5.0 / 40.0)
+
+
+def test_pinned_pinned_frequency_of_the_article_rail():
+    """CHN60 (EI = 2.1e11·3.217e-5, ρA = 7800·7.745e-3) on d = 0.64 m: (π/d)²·sqrt(EI/ρA)/2π."""
+    f = vtb.pinned_pinned_frequency(vtb.paper_config())
+    assert f == pytest.approx((math.pi / 0.64) ** 2 * math.sqrt(2.1e11 * 3.217e-5 / (7800 * 7.745e-3)) / (2 * math.pi))
+    assert 1200 < f < 1350
