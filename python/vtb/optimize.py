@@ -1,0 +1,149 @@
+"""Multi-objective TID optimisation of the article (§4.4, model.md §9).
+
+Objectives: the rail and slab acceleration amplitudes (a_rm, a_sm); constraints: a_rm, a_sm,
+a_rRMS and a_rst below their uncontrolled values, written normalised as X/X0 − 1 ≤ 0; bounds
+1 ≤ b_t ≤ 10 kg, 1e7 ≤ k_t ≤ 8e8 N/m, 10 ≤ c_t ≤ 5e3 N·s/m, k_t and c_t searched on a log scale
+(they span decades). Each generation is one Rust batch call (all cores, GIL released).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Optional
+
+import numpy as np
+
+from . import moga
+from .config import Config
+from .presets import tids_around
+from .simulate import Result, simulate, simulate_batch
+from .tid_sweep import METRICS, case_config
+
+#: (lower, upper) of b_t (kg), k_t (N/m), c_t (N·s/m): the article's bounds.
+BOUNDS = ((1.0, 10.0), (1e7, 8e8), (10.0, 5e3))
+LOG_SCALE = (False, True, True)
+#: Constraint indices: (metric, against the uncontrolled value).
+CONSTRAINTS = ("rail_acc_max", "slab_acc_max", "rail_acc_rms", "rail_acc_settle")
+
+
+@dataclasses.dataclass
+class TidObjectives:
+    """The evaluation of one generation (picklable, for executors): X rows (b_t, k_t, c_t) →
+    F = (a_rm, a_sm), G = X/X0 − 1 for the four constrained indices. A failed run counts as
+    infeasible (G = 1) with F = 10 × the uncontrolled values. ``cache`` keeps every run's
+    metrics by (b_t, k_t, c_t) when evaluated in process."""
+
+    config: Config
+    baseline: dict
+    threads: Optional[int] = None
+    cache: dict = dataclasses.field(default_factory=dict)
+
+    def __call__(self, X: np.ndarray):
+        X = np.asarray(X, dtype=float)
+        runs = simulate_batch([case_config(self.config, *x) for x in X], threads=self.threads, on_error="return")
+        F = np.empty((len(X), 2))
+        G = np.empty((len(X), len(CONSTRAINTS)))
+        for i, (x, r) in enumerate(zip(X, runs)):
+            if isinstance(r, BaseException):
+                F[i] = [10 * self.baseline["rail_acc_max"], 10 * self.baseline["slab_acc_max"]]
+                G[i] = 1.0
+                continue
+            self.cache[tuple(x)] = {m: float(r[m]) for m in METRICS}
+            F[i] = [r["rail_acc_max"], r["slab_acc_max"]]
+            G[i] = [r[m] / self.baseline[m] - 1.0 for m in CONSTRAINTS]
+        return F, G
+
+
+@dataclasses.dataclass
+class OptimizationResult:
+    """``pareto``: numpy columns ``b_t``, ``k_t``, ``c_t`` and every metric of the returned
+    (feasible, non-dominated) set, with reduction rates ``eta_<metric>`` = (X0 − X)/X0 and the
+    comprehensive rail rate ``eta_r``; ``baseline``: the uncontrolled metrics; ``moga``: the
+    optimiser's :class:`vtb.moga.Result` (history, final population); ``config``."""
+
+    pareto: dict
+    baseline: dict
+    moga: moga.Result
+    config: Config
+
+    def __len__(self) -> int:
+        return len(self.pareto["b_t"])
+
+    def trade_offs(self, weights=(0.5, 0.5)) -> dict:
+        """Trade-off selection on (a_rm, a_sm): the knee, the point nearest the ideal, the
+        weighted achievement-scalarising choice, and the best η_r. Returns
+        ``{label: index into pareto}``."""
+        F = np.column_stack([self.pareto["rail_acc_max"], self.pareto["slab_acc_max"]])
+        return {
+            "knee": moga.knee_point(F),
+            "nearest to ideal": moga.min_distance_to_ideal(F),
+            f"ASF {weights[0]:g}/{weights[1]:g}": moga.asf(F, weights),
+            "best η_r": int(np.argmax(self.pareto["eta_r"])),
+        }
+
+    def table(self) -> list:
+        """Rows shaped like the article's Table 3, one per trade-off choice."""
+        rows = []
+        for label, i in self.trade_offs().items():
+            p = self.pareto
+            rows.append(dict(
+                choice=label, b_t=p["b_t"][i], k_t=p["k_t"][i], c_t=p["c_t"][i],
+                rail_acc_max=p["rail_acc_max"][i], eta_rail_acc_max=p["eta_rail_acc_max"][i],
+                rail_acc_rms=p["rail_acc_rms"][i], eta_rail_acc_rms=p["eta_rail_acc_rms"][i],
+                rail_acc_settle=p["rail_acc_settle"][i], eta_rail_acc_settle=p["eta_rail_acc_settle"][i],
+                eta_r=p["eta_r"][i], slab_acc_max=p["slab_acc_max"][i], eta_slab_acc_max=p["eta_slab_acc_max"][i],
+            ))
+        return rows
+
+    def chosen(self, label: str = "best η_r") -> dict:
+        """(b_t, k_t, c_t) of a trade-off choice."""
+        i = self.trade_offs()[label]
+        return {k: float(self.pareto[k][i]) for k in ("b_t", "k_t", "c_t")}
+
+    def histories(self, label: str = "best η_r") -> tuple[Result, Result]:
+        """Full runs of the uncontrolled and the chosen controlled case (Fig. 8, car body)."""
+        c = self.chosen(label)
+        return simulate(case_config(self.config, math.nan, 0, 0)), simulate(case_config(self.config, c["b_t"], c["k_t"], c["c_t"]))
+
+
+def optimize(
+    config: Config,
+    *,
+    pop_size: int = 100,
+    n_gen: int = 100,
+    seed: int = 0,
+    algorithm: str = "nsga2",
+    threads: Optional[int] = None,
+    executor=None,
+    progress: bool = True,
+    **options,
+) -> OptimizationResult:
+    """Optimises the dampers of ``config`` (default :func:`vtb.tids_around`) for (a_rm, a_sm)
+    under the article's constraints and bounds. ``algorithm``: ``"nsga2"`` or ``"gamultiobj"``
+    (see :mod:`vtb.moga`); ``executor``: evaluate generations through it instead of the
+    in-process Rust batch (configs pickle)."""
+    if config.tids is None:
+        config = config.copy()
+        config.tids = tids_around(config)
+    base_run = simulate(case_config(config, math.nan, 0, 0))
+    baseline = base_run.metrics()
+    evaluate = TidObjectives(config, baseline, threads)
+    problem = moga.Problem(
+        lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
+        evaluate=evaluate, log_scale=np.array(LOG_SCALE),
+    )
+    res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor, **options)
+    X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
+    missing = [x for x in X if tuple(x) not in evaluate.cache]
+    if missing:
+        evaluate(np.array(missing))
+    rows = [evaluate.cache[tuple(x)] for x in X]
+    pareto = {"b_t": X[:, 0], "k_t": X[:, 1], "c_t": X[:, 2]}
+    for m in METRICS:
+        pareto[m] = np.array([r[m] for r in rows])
+        pareto["eta_" + m] = np.array([(baseline[m] - r[m]) / baseline[m] if baseline[m] else np.nan for r in rows])
+    pareto["eta_r"] = (pareto["eta_rail_acc_max"] + pareto["eta_rail_acc_rms"] + pareto["eta_rail_acc_settle"]) / 3.0
+    order = np.argsort(pareto["rail_acc_max"])
+    pareto = {k: v[order] for k, v in pareto.items()}
+    return OptimizationResult(pareto=pareto, baseline=baseline, moga=res, config=config)
