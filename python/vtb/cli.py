@@ -65,6 +65,71 @@ def cmd_validate(args) -> int:
     return 0
 
 
+def _floats(text: str) -> list:
+    return [float(v) for v in text.split(",") if v.strip()]
+
+
+def _tid_config(args):
+    from .presets import paper_config, tids_around
+
+    cfg = _load_config(args.config) if args.config else paper_config(calibrated=args.calibrated)
+    if cfg.tids is None:
+        cfg.tids = tids_around(cfg)
+    return cfg
+
+
+def cmd_sweep(args) -> int:
+    from .tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
+
+    cfg = _tid_config(args)
+    t0 = time.perf_counter()
+    res = sweep(
+        cfg,
+        _floats(args.b) if args.b else ARTICLE_B,
+        _floats(args.k) if args.k else ARTICLE_K,
+        _floats(args.c) if args.c else ARTICLE_C,
+        out=args.out,
+        threads=args.threads,
+        progress=not args.no_progress,
+    )
+    text = sweep_report(res, args.report, seconds=time.perf_counter() - t0)
+    print(text)
+    print(f"# journal {args.out}" + (f", report {args.report}" if args.report else ""))
+    return 0
+
+
+def cmd_optimize(args) -> int:
+    from .optimize import optimize
+
+    cfg = _tid_config(args)
+    res = optimize(cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads, progress=not args.no_progress)
+    rows = res.table()
+    print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline['rail_acc_max']:.2f}, a_sm0 = {res.baseline['slab_acc_max']:.3f} m/s²")
+    for r in rows:
+        print(f"{r['choice']:<18} b_t {r['b_t']:.3f} kg  k_t {r['k_t']:.4g} N/m  c_t {r['c_t']:.4g} N·s/m  "
+              f"a_rm {r['rail_acc_max']:.2f} ({100 * r['eta_rail_acc_max']:+.2f} %)  a_sm {r['slab_acc_max']:.3f} ({100 * r['eta_slab_acc_max']:+.2f} %)  η_r {100 * r['eta_r']:+.2f} %")
+    if args.out:
+        import csv
+
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with open(out, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(list(res.pareto))
+            w.writerows(zip(*res.pareto.values()))
+        print(f"# wrote the Pareto set to {out}")
+    return 0
+
+
+def cmd_reproduce(args) -> int:
+    from .reproduce import run
+
+    t0 = time.perf_counter()
+    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed)
+    print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vtb", description="Vehicle–track–bridge vertical dynamics.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -77,6 +142,37 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--out", default="docs/validation.md", help="Markdown page to write (default: docs/validation.md)")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.set_defaults(func=cmd_validate)
+
+    def tid_case(sp):
+        sp.add_argument("--config", help="TOML configuration (default: the article's case with vtb.tids_around dampers)")
+        sp.add_argument("--calibrated", action="store_true", help="the article's case with the irregularity calibrated to a_rm0 = 1005.6 m/s²")
+        sp.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+        sp.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    w = sub.add_parser("sweep", help="the TID parameter sweep (default: the article's 1 840-case grid) with its analyses")
+    tid_case(w)
+    w.add_argument("--b", help="comma-separated b_t values (kg); default 1..10")
+    w.add_argument("--k", help="comma-separated k_t values (N/m); default 1..9e4..1e8 and 1e9")
+    w.add_argument("--c", help="comma-separated c_t values (N·s/m); default 10,100,1000,10000")
+    w.add_argument("--out", default="sweep.csv", help="CSV journal (resumable; .parquet also writes Parquet) (default: sweep.csv)")
+    w.add_argument("--report", help="Markdown report to write")
+    w.set_defaults(func=cmd_sweep)
+
+    o = sub.add_parser("optimize", help="multi-objective TID optimisation (NSGA-II or gamultiobj) of the article's problem")
+    tid_case(o)
+    o.add_argument("--pop", type=int, default=100, help="population size (default 100)")
+    o.add_argument("--gen", type=int, default=100, help="generations (default 100)")
+    o.add_argument("--seed", type=int, default=0)
+    o.add_argument("--algorithm", choices=["nsga2", "gamultiobj"], default="nsga2")
+    o.add_argument("--out", help="CSV file for the Pareto set")
+    o.set_defaults(func=cmd_optimize)
+
+    r = sub.add_parser("reproduce", help="the article's whole chain: §3.3 histories, sweep, optimisation; figures, tables, report")
+    r.add_argument("--out", required=True, help="output directory")
+    r.add_argument("--quick", action="store_true", help="reduced chain (about a minute)")
+    r.add_argument("--seed", type=int, default=0, help="optimiser seed")
+    r.add_argument("--no-progress", action="store_true", help="no progress bars")
+    r.set_defaults(func=cmd_reproduce)
     return p
 
 
