@@ -125,7 +125,7 @@ def cmd_reproduce(args) -> int:
     from .reproduce import run
 
     t0 = time.perf_counter()
-    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed)
+    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -171,6 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", required=True, help="output directory")
     r.add_argument("--quick", action="store_true", help="reduced chain (about a minute)")
     r.add_argument("--seed", type=int, default=0, help="optimiser seed")
+    r.add_argument("--pop", type=int, help="optimiser population (default: 100; --quick 8)")
+    r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.set_defaults(func=cmd_reproduce)
     return p

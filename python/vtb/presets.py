@@ -20,7 +20,7 @@ PAPER_SEED = 2025
 #: calibrated preset is fitted to (the article does not state its irregularity level).
 ARTICLE_RAIL_ACC = 1005.6
 #: Amplitude scale of the TB/T 3352 sample that gives ARTICLE_RAIL_ACC with the default
-#: discretisation (``calibrate_irregularity(paper_config())``; docs/reproduction.md).
+#: discretisation (``calibrate_irregularity(paper_config())``; docs/reproduction/report.md).
 PAPER_CALIBRATED_SCALE = 9.704
 
 

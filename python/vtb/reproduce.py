@@ -64,11 +64,14 @@ def _histories_figure(a, b, labels, path: Path, title: str) -> None:
     plt.close(fig)
 
 
-def run(out, quick: bool = False, progress: bool = True, seed: int = 0) -> Path:
-    """Runs the chain and writes ``out/report.md`` with its figures and tables."""
+def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size: Optional[int] = None, n_gen: Optional[int] = None) -> Path:
+    """Runs the chain and writes ``out/report.md`` with its figures and tables. ``pop_size``,
+    ``n_gen`` override the optimisation budget (full: 100 × 100). The sweep journal
+    ``out/sweep.csv`` is resumed if present."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    plan = QUICK if quick else FULL
+    plan = dict(QUICK if quick else FULL)
+    plan.update({k: v for k, v in (("pop_size", pop_size), ("n_gen", n_gen)) if v is not None})
     times = {}
     cfg = paper_config(calibrated=True)
     cfg.tids = tids_around(cfg)

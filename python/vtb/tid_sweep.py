@@ -310,7 +310,7 @@ def sweep_report(result: SweepResult, path=None, seconds: Optional[float] = None
         "",
         f"Uncontrolled: a_rm0 = {base['rail_acc_max']:.2f} m/s², a_rRMS0 = {base['rail_acc_rms']:.3f} m/s², "
         f"a_rst0 = {base['rail_acc_settle']:.4f} s, a_sm0 = {base['slab_acc_max']:.3f} m/s² "
-        "(article: 1005.6, ≈68.0, ≈1.080, 43.94 — the article's irregularity level is unstated, see docs/reproduction.md).",
+        "(article: 1005.6, ≈68.0, ≈1.080, 43.94 — the article's irregularity level is unstated; vtb calibrates only a_rm0, docs/reproduction/report.md).",
         "",
         "## Best (k_t, c_t) per b_t for the rail acceleration amplitude (Table 2, Fig. 5, Fig. 6)",
         "",

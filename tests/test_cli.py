@@ -1,0 +1,47 @@
+"""The vtb command: help on every subcommand, and the quick reproduction (what CI runs)."""
+
+import pytest
+
+from vtb import cli
+
+COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce"]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_command_has_help(command, capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main([command, "--help"])
+    assert e.value.code == 0
+    assert "usage: vtb " + command in capsys.readouterr().out
+
+
+def test_bad_input_is_a_clean_error(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("speed = -1\n")
+    assert cli.main(["simulate", "--config", str(bad)]) == 2
+    assert "vtb: ConfigError" in capsys.readouterr().err
+
+
+def test_sweep_command_writes_journal_and_report(tmp_path, capsys):
+    cfg = tmp_path / "short.toml"
+    import vtb
+
+    c = vtb.paper_config()
+    c.solver.t_end = 0.1
+    c.output.points = [6.0]
+    c.tids = vtb.tids_around(c, count=2, x=6.0)
+    c.to_toml(cfg)
+    out, rep = tmp_path / "s.csv", tmp_path / "s.md"
+    assert cli.main(["sweep", "--config", str(cfg), "--b", "5", "--k", "1e8,2e8", "--c", "1000", "--out", str(out), "--report", str(rep), "--no-progress"]) == 0
+    assert len(out.read_text().splitlines()) == 1 + 3
+    assert "Best (k_t, c_t) per b_t" in rep.read_text()
+
+
+def test_reproduce_quick(tmp_path):
+    """The quick chain end to end: every figure, table and the report."""
+    out = tmp_path / "rep"
+    assert cli.main(["reproduce", "--out", str(out), "--quick", "--no-progress"]) == 0
+    for name in ["report.md", "fig3_histories.png", "fig5_sweep_rail.png", "fig6_sweep_slab.png", "fig7_pareto.png", "table2.csv", "table_3_3.csv", "sweep.csv"]:
+        assert (out / name).exists(), name
+    text = (out / "report.md").read_text()
+    assert "article, solution 1" in text and "1005.6" in text
