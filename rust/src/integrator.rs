@@ -228,8 +228,9 @@ struct Attached {
     alpha_s: Vec<f64>,
     k: Vec<f64>,
     b: Vec<f64>,
-    /// Y = A₀⁻¹·w_i and, for forward ports, L⁻¹·P·w_i.
+    /// Y = A₀⁻¹·w_i, also as rows (`yt[k·N_t + i]`), and for forward ports D⁻¹·L⁻¹·P·w_i.
     y: Vec<Vec<f64>>,
+    yt: Vec<f64>,
     lw: Vec<Vec<f64>>,
     /// S⁻¹ (row-major, N_t × N_t).
     s_inv: Vec<f64>,
@@ -410,7 +411,8 @@ impl Newmark {
             } else {
                 let f = self.engine.sparse();
                 f.forward::<1>(&mut e, 0);
-                att.lw.push(e.clone());
+                att.lw
+                    .push(e.iter().zip(f.d_inv()).map(|(v, d)| v * d).collect());
                 f.diag_backward(&mut e);
             }
             att.y.push(e);
@@ -435,6 +437,7 @@ impl Newmark {
             }
         }
         att.s_inv = invert_spd(&sm, nt)?;
+        att.yt = (0..ns * nt).map(|q| att.y[q % nt][q / nt]).collect();
         att.t_free = vec![0.0; nt];
         att.wz = vec![0.0; nt];
         self.att = att;
@@ -540,9 +543,7 @@ impl Newmark {
                 *w = if self.columns.is_some() {
                     self.att.w_dot(i, &self.z)
                 } else {
-                    let d = self.engine.sparse().d_inv();
-                    let lw = &self.att.lw[i];
-                    (0..ns).map(|k| lw[k] * d[k] * self.z[k]).sum()
+                    crate::simd::dot(&self.att.lw[i], &self.z[..ns])
                 };
             }
             let mut t = std::mem::take(&mut self.att.t_free);
@@ -563,10 +564,20 @@ impl Newmark {
         ports.ny.resize(nt, [0.0; GW]);
         ports.sfy.resize(nt, [0.0; GW]);
         ports.fy.resize(nt, [0.0; GW]);
-        for (a, y) in self.att.y.iter().enumerate() {
-            for c in 0..GW {
-                ports.ny[a][c] = ports.vecs[c].dot(y);
-                ports.fy[a][c] = ports.force_vec(c).dot(y);
+        // Row-wise over the port entries: the inner loop runs over the dampers.
+        for c in 0..GW {
+            let n = &ports.vecs[c];
+            let f = ports.force.as_ref().map_or(n, |f| &f[c]);
+            for a in 0..nt {
+                ports.ny[a][c] = 0.0;
+                ports.fy[a][c] = 0.0;
+            }
+            for (q, &k) in n.idx.iter().enumerate() {
+                let (vn, vf) = (n.val[q], f.val[q]);
+                for (a, y) in self.att.yt[k * nt..(k + 1) * nt].iter().enumerate() {
+                    ports.ny[a][c] += vn * y;
+                    ports.fy[a][c] += vf * y;
+                }
             }
         }
         for a in 0..nt {
