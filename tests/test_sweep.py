@@ -170,3 +170,29 @@ def test_pinned_pinned_frequency_of_the_article_rail():
     f = vtb.pinned_pinned_frequency(vtb.paper_config())
     assert f == pytest.approx((math.pi / 0.64) ** 2 * math.sqrt(2.1e11 * 3.217e-5 / (7800 * 7.745e-3)) / (2 * math.pi))
     assert 1200 < f < 1350
+
+
+def test_journal_of_another_configuration_is_refused(short, tmp_path):
+    out = tmp_path / "s.csv"
+    vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
+    other = short.copy()
+    other.speed = 70.0
+    with pytest.raises(vtb.ConfigError, match="another configuration"):
+        vtb.sweep(other, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
+
+
+def test_changed_grid_reruns_cases_whose_parameters_differ(short, tmp_path, monkeypatch):
+    out = tmp_path / "s.csv"
+    vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
+    ran = []
+    real = sweep_mod._run_chunk
+    monkeypatch.setattr(sweep_mod, "_run_chunk", lambda config, cases, threads: ran.extend(c[0] for c in cases) or real(config, cases, threads))
+    r = vtb.sweep(short, b_t=[5.0], k_t=[1e8], c_t=[1e3], out=out, progress=False)
+    assert ran == [1] and r.columns["k_t"][1] == 1e8
+
+
+def test_analyses_refuse_a_sweep_without_successes():
+    s = _synthetic()
+    s.columns["error"] = np.array(["x"] * len(s))
+    with pytest.raises(vtb.VtbError):
+        s.best()

@@ -16,6 +16,7 @@ import numpy as np
 
 from . import moga
 from .config import Config
+from .errors import VtbError
 from .presets import tids_around
 from .simulate import Result, simulate, simulate_batch
 from .tid_sweep import METRICS, case_config
@@ -31,7 +32,7 @@ CONSTRAINTS = ("rail_acc_max", "slab_acc_max", "rail_acc_rms", "rail_acc_settle"
 class TidObjectives:
     """The evaluation of one generation (picklable, for executors): X rows (b_t, k_t, c_t) →
     F = (a_rm, a_sm), G = X/X0 − 1 for the four constrained indices. A failed run counts as
-    infeasible (G = 1) with F = 10 × the uncontrolled values. ``cache`` keeps every run's
+    infeasible (G = ∞) with F = 10 × the uncontrolled values. ``cache`` keeps every run's
     metrics by (b_t, k_t, c_t) when evaluated in process."""
 
     config: Config
@@ -47,11 +48,11 @@ class TidObjectives:
         for i, (x, r) in enumerate(zip(X, runs)):
             if isinstance(r, BaseException):
                 F[i] = [10 * self.baseline["rail_acc_max"], 10 * self.baseline["slab_acc_max"]]
-                G[i] = 1.0
+                G[i] = np.inf
                 continue
             self.cache[tuple(x)] = {m: float(r[m]) for m in METRICS}
             F[i] = [r["rail_acc_max"], r["slab_acc_max"]]
-            G[i] = [r[m] / self.baseline[m] - 1.0 for m in CONSTRAINTS]
+            G[i] = [r[m] / self.baseline[m] - 1.0 if self.baseline[m] > 0 else r[m] for m in CONSTRAINTS]
         return F, G
 
 
@@ -74,6 +75,8 @@ class OptimizationResult:
         """Trade-off selection on (a_rm, a_sm): the knee, the point nearest the ideal, the
         weighted achievement-scalarising choice, and the best η_r. Returns
         ``{label: index into pareto}``."""
+        if len(self) == 0:
+            raise VtbError("the optimisation found no feasible solution: raise the budget (pop_size, n_gen)")
         F = np.column_stack([self.pareto["rail_acc_max"], self.pareto["slab_acc_max"]])
         return {
             "knee": moga.knee_point(F),
@@ -128,7 +131,8 @@ def optimize(
         config.tids = tids_around(config)
     base_run = simulate(case_config(config, math.nan, 0, 0))
     baseline = base_run.metrics()
-    evaluate = TidObjectives(config, baseline, threads)
+    # Executor workers run one case at a time each.
+    evaluate = TidObjectives(config, baseline, 1 if executor is not None else threads)
     problem = moga.Problem(
         lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
         evaluate=evaluate, log_scale=np.array(LOG_SCALE),

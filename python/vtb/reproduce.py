@@ -126,7 +126,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     t0 = time.perf_counter()
     opt = optimize(cfg, pop_size=plan["pop_size"], n_gen=plan["n_gen"], seed=seed, progress=progress)
     times["optimisation"] = time.perf_counter() - t0
-    table3 = opt.table()
+    table3 = opt.table() if len(opt) else []
     if table3:
         _write_csv(out / "table3.csv", table3)
     pop = opt.moga.pop

@@ -2,15 +2,17 @@
 
 ``vtb.sweep(config)`` runs the uncontrolled baseline and the Cartesian grid of (b_t, k_t, c_t)
 with the dampers of ``config.tids`` (default :func:`vtb.tids_around`), in parallel in Rust or
-through any :class:`concurrent.futures.Executor`. With ``out=`` every finished case is appended
-to a CSV journal as it completes; re-running with the same path skips the finished cases.
+through any :class:`concurrent.futures.Executor`. With ``out=`` finished cases are appended to a
+CSV journal chunk by chunk as they complete; re-running with the same path skips them.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import json
 import math
+import numbers
 import os
 from concurrent.futures import Executor, as_completed
 from pathlib import Path
@@ -54,8 +56,16 @@ class SweepResult:
     @property
     def baseline(self) -> dict:
         """Metrics of the uncontrolled run (case 0)."""
-        i = int(np.flatnonzero(self.columns["case"] == 0)[0])
-        return {k: float(self.columns[k][i]) for k in METRICS}
+        i = np.flatnonzero(self.columns["case"] == 0)
+        if i.size == 0 or self.columns["error"][i[0]]:
+            raise VtbError("the sweep has no successful uncontrolled run (case 0): " + (str(self.columns["error"][i[0]]) if i.size else "missing"))
+        return {k: float(self.columns[k][i[0]]) for k in METRICS}
+
+    def _require_controlled(self) -> np.ndarray:
+        ok = self.controlled
+        if not ok.any():
+            raise VtbError("the sweep has no successful TID case")
+        return ok
 
     @property
     def controlled(self) -> np.ndarray:
@@ -85,7 +95,7 @@ class SweepResult:
         comprehensive rate ``eta_r``, ``slab_acc_max`` there and its change against the
         baseline, ``slab_acc_min`` (the lowest a_sm of any case with that b_t) and
         ``working_frequency`` f_t = sqrt(k_t/b_t)/2π (Hz)."""
-        c, ok, base = self.columns, self.controlled, self.baseline
+        c, ok, base = self.columns, self._require_controlled(), self.baseline
         rows = []
         for b in np.unique(c["b_t"][ok]):
             sel = np.flatnonzero(ok & (c["b_t"] == b))
@@ -104,7 +114,7 @@ class SweepResult:
 
     def best(self) -> dict:
         """The case with the lowest a_rm overall, with its reduction against the baseline."""
-        c, ok = self.columns, self.controlled
+        c, ok = self.columns, self._require_controlled()
         i = np.flatnonzero(ok)[np.argmin(c["rail_acc_max"][ok])]
         out = {k: float(c[k][i]) for k in ("b_t", "k_t", "c_t") + METRICS}
         out["eta_rail_acc_max"] = 1 - out["rail_acc_max"] / self.baseline["rail_acc_max"]
@@ -152,7 +162,7 @@ def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
     for (case, b, k, c), r in zip(cases, results):
         row = {"case": case, "b_t": b, "k_t": k, "c_t": c}
         if isinstance(r, BaseException):
-            row.update({m: math.nan for m in METRICS}, error=f"{type(r).__name__}: {r}")
+            row.update({m: math.nan for m in METRICS}, error=" ".join(f"{type(r).__name__}: {r}".split()))
         else:
             row.update({m: float(r[m]) for m in METRICS}, error="")
         rows.append(row)
@@ -181,7 +191,10 @@ def _drop_partial_line(path: Path) -> None:
 def _read_rows(path: Path) -> list:
     rows = []
     with open(path, newline="") as f:
-        for r in csv.DictReader(f):
+        reader = csv.DictReader(f)
+        if not set(COLUMNS) <= set(reader.fieldnames or ()):
+            raise config_error("out", str(path), f"is not a vtb sweep journal (columns {reader.fieldnames})")
+        for r in reader:
             if r.get("error") is None:  # a line cut short by a kill
                 continue
             try:
@@ -218,7 +231,7 @@ def sweep(
         if len(vals) == 0:
             raise config_error(name, list(vals), "needs at least one value")
         for v in vals:
-            ok = isinstance(v, (int, float)) and math.isfinite(v) and (v >= 0 if low is None else v > low)
+            ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and (v >= 0 if low is None else v > low)
             if not ok:
                 raise config_error(name, v, "must be finite and " + ("non-negative" if low is None else "positive"))
     if config.tids is None:
@@ -236,11 +249,22 @@ def sweep(
         out = Path(out)
         journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
         journal.parent.mkdir(parents=True, exist_ok=True)
+        # The journal belongs to one configuration: its sidecar records it.
+        sidecar = journal.with_name(journal.name + ".config.json")
+        stamp = json.dumps(config.to_dict(), sort_keys=True)
         if journal.exists() and journal.stat().st_size > 0:
+            if sidecar.exists() and sidecar.read_text() != stamp:
+                raise config_error("out", str(journal), "holds a sweep of another configuration (see its .config.json); choose another path")
             _drop_partial_line(journal)
+        if journal.exists() and journal.stat().st_size > 0:
             done_rows = _read_rows(journal)
         else:
             _write_rows(journal, [], header=True, mode="w")
+        sidecar.write_text(stamp)
+    # A journal row counts only if it is this grid's case with these parameters.
+    key = {c[0]: c[1:] for c in cases}
+    same = lambda r: r["case"] in key and all((math.isnan(a) and math.isnan(b)) or a == b for a, b in zip(key[r["case"]], (r["b_t"], r["k_t"], r["c_t"])))
+    done_rows = [r for r in done_rows if same(r)]
     finished = {r["case"] for r in done_rows}
     todo = [c for c in cases if c[0] not in finished]
     total, done = len(cases), len(cases) - len(todo)
@@ -272,9 +296,18 @@ def sweep(
             for ch in chunks:
                 finish(_run_chunk(config, ch, threads))
         else:
-            futures = [executor.submit(_run_chunk, config, ch, 1) for ch in chunks]
-            for fut in as_completed(futures):
-                finish(fut.result())
+            futures = {executor.submit(_run_chunk, config, ch, 1): ch for ch in chunks}
+            try:
+                for fut in as_completed(futures):
+                    try:
+                        new = fut.result()
+                    except Exception as e:  # a worker lost: record its cases, carry on
+                        reason = " ".join(f"worker failed: {type(e).__name__}: {e}".split())
+                        new = [dict({m: math.nan for m in METRICS}, case=c, b_t=b, k_t=k, c_t=cc, error=reason) for c, b, k, cc in futures[fut]]
+                    finish(new)
+            finally:
+                for fut in futures:
+                    fut.cancel()
     finally:
         if bar is not None:
             bar.close()
@@ -318,7 +351,8 @@ def sweep_report(result: SweepResult, path=None, seconds: Optional[float] = None
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for j in range(len(t["b_t"])):
-        art = ARTICLE_TABLE2.get(int(t["b_t"][j]))
+        b = float(t["b_t"][j])
+        art = ARTICLE_TABLE2.get(int(b)) if b.is_integer() else None
         lines.append(
             f"| {t['b_t'][j]:g} | {t['k_t'][j]:.0e} | {t['c_t'][j]:g} | {t['working_frequency'][j]:.0f} | {t['rail_acc_max'][j]:.2f} | "
             f"{100 * t['eta_rail_acc_max'][j]:+.2f} % | {100 * t['eta_rail_acc_rms'][j]:+.2f} % | {100 * t['eta_rail_acc_settle'][j]:+.2f} % | "

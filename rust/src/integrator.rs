@@ -520,6 +520,13 @@ impl Newmark {
 
     /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering).
     pub fn begin_step(&mut self, f_prev: &[f64], f_next: &[f64]) {
+        // Columns are dropped between steps only: every port block of a step (one per car)
+        // must find its columns until the step ends.
+        if let Some(cache) = &mut self.columns
+            && cache.len() > COLUMN_CACHE
+        {
+            cache.clear();
+        }
         let h = 0.5 * self.dt;
         for (((z, q), fp), fnx) in self.z.iter_mut().zip(&self.q).zip(f_prev).zip(f_next) {
             *z = q + h * (fp + fnx);
@@ -589,9 +596,6 @@ impl Newmark {
     pub fn prepare_ports(&mut self, ports: &mut PortBlock) {
         self.prepare_damper_ports(ports);
         if let Some(cache) = &mut self.columns {
-            if cache.len() > COLUMN_CACHE {
-                cache.retain(|k, _| ports.vecs.iter().any(|v| v.idx.contains(k)));
-            }
             for v in ports.vecs.iter().chain(ports.force.iter().flatten()) {
                 for &k in &v.idx {
                     cache.entry(k).or_insert_with(|| {
