@@ -2,7 +2,8 @@
 //! one car, 80 m/s, Δt = 5e−5 s, ≈ 34 500 steps) on one core, with the irregularity sample
 //! the Python preset generates (benches/data, written by benches/make_fixture.py): the FE–SEA
 //! hybrid (the preset: 120 global + 100 local rail sines, ω_r = 2π·800 Hz), the uncorrected
-//! modal model and the conventional finite-element reference (251 elements per layer).
+//! modal model, the hybrid with the optimisation's 10 TIDs and the conventional finite-element
+//! reference (251 elements per layer).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::Path;
@@ -36,6 +37,19 @@ fn bench_paper(c: &mut Criterion) {
     };
     let hybrid = presets::paper();
     g.bench_function("hybrid_full_run", |b| b.iter(|| run(&hybrid)));
+    // The optimisation's evaluation: the hybrid with 10 rail–slab TIDs (vtb.tids_around).
+    let mut tids = presets::paper();
+    tids.tids = Some(vtb::config::TidConfig {
+        inertance: 5.0,
+        stiffness: 2e8,
+        damping: 1e3,
+        count: 10,
+        x0: 77.12,
+        spacing: 0.64,
+        upper: "rail".into(),
+        lower: "slab".into(),
+    });
+    g.bench_function("hybrid_10_tids_full_run", |b| b.iter(|| run(&tids)));
     let mut modal = presets::paper();
     modal.discretisation.method = vtb::config::Method::Modal;
     g.bench_function("modal_full_run", |b| b.iter(|| run(&modal)));

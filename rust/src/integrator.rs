@@ -132,6 +132,9 @@ pub struct PortBlock {
     ny: Vec<[f64; GW]>,
     sfy: Vec<[f64; GW]>,
     fy: Vec<[f64; GW]>,
+    /// Scratch per damper: n_c·y_a and (f_c − n_c)·y_a of one port.
+    yn: Vec<f64>,
+    yd: Vec<f64>,
 }
 
 impl PortBlock {
@@ -146,6 +149,8 @@ impl PortBlock {
             ny: Vec::new(),
             sfy: Vec::new(),
             fy: Vec::new(),
+            yn: Vec::new(),
+            yd: Vec::new(),
         }
     }
 
@@ -216,11 +221,70 @@ pub struct Attachment {
     pub inertance: f64,
 }
 
+/// Shape vectors of all dampers' upper (or lower) points stored densely on the union of
+/// their indices, so that a step gathers and scatters each stepper vector once and the
+/// per-damper work is contiguous dots and axpys (the modal rail shapes of all dampers share
+/// one index set).
+#[derive(Clone, Debug, Default)]
+struct ShapeSet {
+    idx: Vec<usize>,
+    /// Column a (length `idx.len()`) holds damper a's shape values.
+    cols: Vec<f64>,
+    buf: Vec<f64>,
+}
+
+impl ShapeSet {
+    fn new(shapes: &[SVec]) -> Self {
+        let mut idx: Vec<usize> = shapes.iter().flat_map(|v| v.idx.iter().copied()).collect();
+        idx.sort_unstable();
+        idx.dedup();
+        let len = idx.len();
+        let mut cols = vec![0.0; len * shapes.len()];
+        for (a, v) in shapes.iter().enumerate() {
+            for (&i, &x) in v.idx.iter().zip(&v.val) {
+                cols[a * len + idx.binary_search(&i).expect("index in union")] += x;
+            }
+        }
+        Self {
+            idx,
+            cols,
+            buf: vec![0.0; len],
+        }
+    }
+
+    fn col(&self, a: usize) -> &[f64] {
+        let len = self.idx.len();
+        &self.cols[a * len..(a + 1) * len]
+    }
+
+    /// out[a] = shape_a·x.
+    fn dots(&mut self, x: &[f64], out: &mut [f64]) {
+        for (b, &i) in self.buf.iter_mut().zip(&self.idx) {
+            *b = x[i];
+        }
+        for (a, o) in out.iter_mut().enumerate() {
+            *o = crate::simd::dot(self.col(a), &self.buf);
+        }
+    }
+
+    /// x += Σ_a w[a]·shape_a.
+    fn add_to(&mut self, x: &mut [f64], w: &[f64]) {
+        let len = self.idx.len();
+        self.buf.fill(0.0);
+        for (a, &wa) in w.iter().enumerate() {
+            crate::simd::axpy(&mut self.buf, &self.cols[a * len..(a + 1) * len], wa);
+        }
+        for (&b, &i) in self.buf.iter().zip(&self.idx) {
+            x[i] += b;
+        }
+    }
+}
+
 /// The dampers of a stepper, in its numbering, with their Woodbury data.
 #[derive(Clone, Debug, Default)]
 struct Attached {
-    upper: Vec<SVec>,
-    lower: Vec<SVec>,
+    upper: ShapeSet,
+    lower: ShapeSet,
     /// Stepper index of each internal node.
     node: Vec<usize>,
     /// α_r = Δt·c + Δt²k/2 and α_s = 2b (their parts of A), k and b.
@@ -234,9 +298,14 @@ struct Attached {
     lw: Vec<Vec<f64>>,
     /// S⁻¹ (row-major, N_t × N_t).
     s_inv: Vec<f64>,
-    /// S⁻¹·Wᵀ·A₀⁻¹·b of the step's known right-hand side, and scratch.
+    /// S⁻¹·Wᵀ·A₀⁻¹·b of the step's known right-hand side, and scratch: Wᵀ·z, the upper and
+    /// lower shapes' products with z, per-damper weights.
     t_free: Vec<f64>,
     wz: Vec<f64>,
+    pu: Vec<f64>,
+    pl: Vec<f64>,
+    wu: Vec<f64>,
+    wl: Vec<f64>,
 }
 
 impl Attached {
@@ -244,8 +313,14 @@ impl Attached {
         self.node.len()
     }
 
-    fn w_dot(&self, i: usize, x: &[f64]) -> f64 {
-        self.upper[i].dot(x) - self.lower[i].dot(x)
+    /// wz = Wᵀ·x (W's columns: upper − lower shapes); also leaves the upper and lower
+    /// products in pu, pl.
+    fn w_dots(&mut self, x: &[f64]) {
+        self.upper.dots(x, &mut self.pu);
+        self.lower.dots(x, &mut self.pl);
+        for ((w, u), l) in self.wz.iter_mut().zip(&self.pu).zip(&self.pl) {
+            *w = u - l;
+        }
     }
 
     /// out = S⁻¹·v.
@@ -401,6 +476,7 @@ impl Newmark {
         let (dt, ns, nt) = (self.dt, self.ns, attachments.len());
         let mut att = Attached::default();
         let mut kappa = Vec::with_capacity(nt);
+        let (mut uppers, mut lowers) = (Vec::with_capacity(nt), Vec::with_capacity(nt));
         for (i, a) in attachments.iter().enumerate() {
             let (up, lo) = (self.vector(&a.upper), self.vector(&a.lower));
             let mut e = vec![0.0; ns];
@@ -416,8 +492,8 @@ impl Newmark {
                 f.diag_backward(&mut e);
             }
             att.y.push(e);
-            att.upper.push(up);
-            att.lower.push(lo);
+            uppers.push(up);
+            lowers.push(lo);
             att.node.push(ns + i);
             let (ar, as_) = (
                 dt * a.damping + 0.5 * dt * dt * a.stiffness,
@@ -429,17 +505,29 @@ impl Newmark {
             att.b.push(a.inertance);
             kappa.push(ar * as_ / (ar + as_));
         }
+        att.upper = ShapeSet::new(&uppers);
+        att.lower = ShapeSet::new(&lowers);
+        for v in [
+            &mut att.t_free,
+            &mut att.wz,
+            &mut att.pu,
+            &mut att.pl,
+            &mut att.wu,
+            &mut att.wl,
+        ] {
+            *v = vec![0.0; nt];
+        }
         let mut sm = vec![0.0; nt * nt];
-        for i in 0..nt {
-            for j in 0..nt {
-                sm[i * nt + j] =
-                    att.w_dot(i, &att.y[j]) + if i == j { 1.0 / kappa[i] } else { 0.0 };
+        for j in 0..nt {
+            let yj = std::mem::take(&mut att.y[j]);
+            att.w_dots(&yj);
+            att.y[j] = yj;
+            for i in 0..nt {
+                sm[i * nt + j] = att.wz[i] + if i == j { 1.0 / kappa[i] } else { 0.0 };
             }
         }
         att.s_inv = invert_spd(&sm, nt)?;
         att.yt = (0..ns * nt).map(|q| att.y[q % nt][q / nt]).collect();
-        att.t_free = vec![0.0; nt];
-        att.wz = vec![0.0; nt];
         self.att = att;
         Ok(())
     }
@@ -532,11 +620,15 @@ impl Newmark {
             *z = q + h * (fp + fnx);
         }
         // Damper nodes: a_d·v̄_d = b_d + (α_r·N_upper + α_s·N_lower)ᵀv̄, eliminated.
-        let att = &self.att;
-        for i in 0..att.len() {
-            let g = self.z[att.node[i]] / (att.alpha_r[i] + att.alpha_s[i]);
-            att.upper[i].add_to(&mut self.z, att.alpha_r[i] * g);
-            att.lower[i].add_to(&mut self.z, att.alpha_s[i] * g);
+        let att = &mut self.att;
+        if att.len() > 0 {
+            for i in 0..att.len() {
+                let g = self.z[att.node[i]] / (att.alpha_r[i] + att.alpha_s[i]);
+                att.wu[i] = att.alpha_r[i] * g;
+                att.wl[i] = att.alpha_s[i] * g;
+            }
+            att.upper.add_to(&mut self.z, &att.wu);
+            att.lower.add_to(&mut self.z, &att.wl);
         }
         let ns = self.ns;
         if self.columns.is_some() {
@@ -545,18 +637,16 @@ impl Newmark {
             self.engine.sparse().forward::<1>(&mut self.z[..ns], 0);
         }
         if self.att.len() > 0 {
-            let mut wz = std::mem::take(&mut self.att.wz);
-            for (i, w) in wz.iter_mut().enumerate() {
-                *w = if self.columns.is_some() {
-                    self.att.w_dot(i, &self.z)
-                } else {
-                    crate::simd::dot(&self.att.lw[i], &self.z[..ns])
-                };
+            if self.columns.is_some() {
+                self.att.w_dots(&self.z);
+            } else {
+                for (w, lw) in self.att.wz.iter_mut().zip(&self.att.lw) {
+                    *w = crate::simd::dot(lw, &self.z[..ns]);
+                }
             }
             let mut t = std::mem::take(&mut self.att.t_free);
-            self.att.s_solve(&wz, &mut t);
+            self.att.s_solve(&self.att.wz, &mut t);
             self.att.t_free = t;
-            self.att.wz = wz;
         }
     }
 
@@ -571,22 +661,34 @@ impl Newmark {
         ports.ny.resize(nt, [0.0; GW]);
         ports.sfy.resize(nt, [0.0; GW]);
         ports.fy.resize(nt, [0.0; GW]);
-        // Row-wise over the port entries: the inner loop runs over the dampers.
+        // Row-wise over the port entries: the inner loop runs over the dampers. Force and
+        // displacement vectors differ at a few entries only (FE–SEA correction).
+        let (mut yn, mut yd) = (std::mem::take(&mut ports.yn), std::mem::take(&mut ports.yd));
+        yn.resize(nt, 0.0);
+        yd.resize(nt, 0.0);
         for c in 0..GW {
             let n = &ports.vecs[c];
             let f = ports.force.as_ref().map_or(n, |f| &f[c]);
-            for a in 0..nt {
-                ports.ny[a][c] = 0.0;
-                ports.fy[a][c] = 0.0;
-            }
+            yn.fill(0.0);
+            yd.fill(0.0);
             for (q, &k) in n.idx.iter().enumerate() {
                 let (vn, vf) = (n.val[q], f.val[q]);
-                for (a, y) in self.att.yt[k * nt..(k + 1) * nt].iter().enumerate() {
-                    ports.ny[a][c] += vn * y;
-                    ports.fy[a][c] += vf * y;
+                let row = &self.att.yt[k * nt..(k + 1) * nt];
+                for (acc, y) in yn.iter_mut().zip(row) {
+                    *acc += vn * y;
+                }
+                if vf != vn {
+                    for (acc, y) in yd.iter_mut().zip(row) {
+                        *acc += (vf - vn) * y;
+                    }
                 }
             }
+            for a in 0..nt {
+                ports.ny[a][c] = yn[a];
+                ports.fy[a][c] = yn[a] + yd[a];
+            }
         }
+        (ports.yn, ports.yd) = (yn, yd);
         for a in 0..nt {
             let row = &self.att.s_inv[a * nt..(a + 1) * nt];
             ports.sfy[a] = std::array::from_fn(|c| (0..nt).map(|b| row[b] * ports.fy[b][c]).sum());
@@ -751,43 +853,44 @@ impl Newmark {
         }
     }
 
-    /// v̄ = A⁻¹b from z = A₀⁻¹b (Woodbury), then the damper nodes' v̄_d.
+    /// v̄ = A⁻¹b from z = A₀⁻¹b (Woodbury), then the damper nodes' v̄_d, then the dampers'
+    /// parts of M·v̄ and K·v̄: b·(e_d − N_lower)(…)ᵀ and k·(N_upper − e_d)(…)ᵀ.
     fn finish_dampers(&mut self) {
-        let nt = self.att.len();
+        let (nt, ns) = (self.att.len(), self.ns);
         if nt == 0 {
             return;
         }
-        let mut wz = std::mem::take(&mut self.att.wz);
-        let mut t = std::mem::take(&mut self.att.t_free);
-        for (i, w) in wz.iter_mut().enumerate() {
-            *w = self.att.w_dot(i, &self.z);
+        let att = &mut self.att;
+        att.w_dots(&self.z);
+        let mut t = std::mem::take(&mut att.t_free);
+        att.s_solve(&att.wz, &mut t);
+        // z[..ns] −= Y·t, row by row over the contiguous rows of Y.
+        for (zk, row) in self.z[..ns].iter_mut().zip(att.yt.chunks_exact(nt)) {
+            *zk -= row.iter().zip(&t).map(|(y, ti)| y * ti).sum::<f64>();
         }
-        self.att.s_solve(&wz, &mut t);
-        for (y, ti) in self.att.y.iter().zip(&t) {
-            crate::simd::axpy(&mut self.z[..self.ns], y, -ti);
-        }
-        let att = &self.att;
+        att.t_free = t;
+        att.w_dots(&self.z);
         for i in 0..nt {
             let d = att.node[i];
-            let h = att.alpha_r[i] * att.upper[i].dot(&self.z)
-                + att.alpha_s[i] * att.lower[i].dot(&self.z);
-            self.z[d] = (self.z[d] + h) / (att.alpha_r[i] + att.alpha_s[i]);
+            let h = att.alpha_r[i] * att.pu[i] + att.alpha_s[i] * att.pl[i];
+            let zd = (self.z[d] + h) / (att.alpha_r[i] + att.alpha_s[i]);
+            self.z[d] = zd;
+            let vm = att.b[i] * (zd - att.pl[i]);
+            let vk = att.k[i] * (att.pu[i] - zd);
+            self.y1[d] = vm;
+            self.y2[d] = -vk;
+            att.wl[i] = -vm;
+            att.wu[i] = vk;
         }
-        self.att.wz = wz;
-        self.att.t_free = t;
     }
 
-    /// The dampers' parts of M·v̄ and K·v̄: b·(e_d − N_lower)(…)ᵀ and k·(N_upper − e_d)(…)ᵀ.
+    /// Adds the dampers' parts of M·v̄ and K·v̄ (weights left by `finish_dampers`) once the
+    /// structure's products have been written.
     fn damper_products(&mut self) {
-        let att = &self.att;
-        for i in 0..att.len() {
-            let d = att.node[i];
-            let vm = att.b[i] * (self.z[d] - att.lower[i].dot(&self.z));
-            let vk = att.k[i] * (att.upper[i].dot(&self.z) - self.z[d]);
-            self.y1[d] = vm;
-            att.lower[i].add_to(&mut self.y1, -vm);
-            self.y2[d] = -vk;
-            att.upper[i].add_to(&mut self.y2, vk);
+        let att = &mut self.att;
+        if att.len() > 0 {
+            att.lower.add_to(&mut self.y1, &att.wl);
+            att.upper.add_to(&mut self.y2, &att.wu);
         }
     }
 
