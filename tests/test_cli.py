@@ -4,7 +4,7 @@ import pytest
 
 from vtb import cli
 
-COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce"]
+COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce", "examples"]
 
 
 @pytest.mark.parametrize("command", COMMANDS)

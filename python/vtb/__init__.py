@@ -29,7 +29,7 @@ from .config import (
 from .errors import ConfigError, ConvergenceError, SolverError, VtbError
 from .fesea import FeSeaReport, fesea_report
 from .irregularity import Irregularity
-from .presets import crh3_car, moving_load_config, paper_config, paper_irregularity, tids_around
+from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
 from .simulate import Result, assembled_matrices, irregularity_profile, simulate, simulate_batch
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
 from .optimize import OptimizationResult, optimize
@@ -38,6 +38,6 @@ __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
     "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "irregularity",
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
-    "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car",
+    "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
 ]

@@ -12,16 +12,20 @@ from .errors import VtbError
 
 
 def _load_config(path: str | None):
-    from .presets import paper_config
+    """The article's case, a TOML file, or a shipped example by name (``vtb examples``)."""
+    from .presets import example_config, examples, paper_config
 
     if path is None:
         return paper_config()
     from .config import Config
 
+    if not Path(path).is_file() and path in examples():
+        return example_config(path)
     return Config.from_toml(Path(path))
 
 
-def _print_metrics(metrics: dict, out=sys.stdout) -> None:
+def _print_metrics(metrics: dict, out=None) -> None:
+    out = out or sys.stdout
     width = max(len(k) for k in metrics)
     for k, v in metrics.items():
         print(f"{k:<{width}}  {v:.6g}", file=out)
@@ -121,6 +125,22 @@ def cmd_optimize(args) -> int:
     return 0
 
 
+def cmd_examples(args) -> int:
+    from .presets import example_text, examples
+
+    if args.name:
+        sys.stdout.write(example_text(args.name))
+        return 0
+    import textwrap
+
+    ex = examples()
+    width = max(len(k) for k in ex)
+    for name, text in ex.items():
+        print(f"{name:<{width}}  {textwrap.shorten(text, 100)}")
+    print("# vtb examples NAME > my.toml  writes one; --config NAME runs it")
+    return 0
+
+
 def cmd_reproduce(args) -> int:
     from .reproduce import run
 
@@ -134,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vtb", description="Vehicle–track–bridge vertical dynamics.")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("simulate", help="run one configuration (default: the article's case) and print its metrics")
-    s.add_argument("--config", help="TOML configuration (default: vtb.paper_config())")
+    s.add_argument("--config", help="TOML configuration, or a shipped example's name (vtb examples) (default: vtb.paper_config())")
     s.add_argument("--out", help="directory for result.npz, metrics.json, config.toml and a plot")
     s.add_argument("--no-plot", action="store_true", help="do not write histories.png")
     s.set_defaults(func=cmd_simulate)
@@ -144,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.set_defaults(func=cmd_validate)
 
     def tid_case(sp):
-        sp.add_argument("--config", help="TOML configuration (default: the article's case with vtb.tids_around dampers)")
+        sp.add_argument("--config", help="TOML configuration or a shipped example's name (default: the article's case with vtb.tids_around dampers)")
         sp.add_argument("--calibrated", action="store_true", help="the article's case with the irregularity calibrated to a_rm0 = 1005.6 m/s²")
         sp.add_argument("--threads", type=int, help="worker threads (default: all cores)")
         sp.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -166,6 +186,10 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--algorithm", choices=["nsga2", "gamultiobj"], default="nsga2")
     o.add_argument("--out", help="CSV file for the Pareto set")
     o.set_defaults(func=cmd_optimize)
+
+    e = sub.add_parser("examples", help="list the example configurations shipped with vtb, or print one as TOML")
+    e.add_argument("name", nargs="?", help="example to print (e.g. article)")
+    e.set_defaults(func=cmd_examples)
 
     r = sub.add_parser("reproduce", help="the article's whole chain: §3.3 histories, sweep, optimisation; figures, tables, report")
     r.add_argument("--out", required=True, help="output directory")

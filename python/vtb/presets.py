@@ -157,3 +157,39 @@ def calibrate_irregularity(config: Config, target: float = ARTICLE_RAIL_ACC, rto
         s0, a0, s1 = s1, a1, s1 + (target - a1) * (s1 - s0) / (a1 - a0)
         a1 = amp(s1)
     raise ConvergenceError(f"irregularity calibration did not reach {target} within {max_iter} runs (last {a1})")
+
+
+def _example_files() -> dict:
+    from importlib.resources import files
+
+    return {p.name[: -len(".toml")]: p for p in files("vtb").joinpath("examples").iterdir() if p.name.endswith(".toml")}
+
+
+def examples() -> dict:
+    """The example configurations shipped with the package (``vtb/examples/*.toml``): name →
+    the first paragraph of the file's header comment."""
+    out = {}
+    for name, p in sorted(_example_files().items()):
+        lines = []
+        for line in p.read_text().splitlines():
+            if line.rstrip() == "#" or not line.startswith("#"):
+                break
+            lines.append(line[1:].strip())
+        out[name] = " ".join(lines)
+    return out
+
+
+def example_text(name: str) -> str:
+    """The TOML text of a shipped example (header comments included)."""
+    from .errors import config_error
+
+    files = _example_files()
+    if name not in files:
+        raise config_error("example", name, f"no such example; shipped: {', '.join(sorted(files))}")
+    return files[name].read_text()
+
+
+def example_config(name: str) -> Config:
+    """A shipped example configuration (see :func:`examples`), e.g. ``"article"``: the
+    article's case with the calibrated irregularity, as ``vtb simulate --config article``."""
+    return Config.from_toml(example_text(name))

@@ -650,8 +650,6 @@ impl Newmark {
         }
     }
 
-    /// Prepares the port vectors set this step: forward substitution, or the cached columns
-    /// of A⁻¹ they need.
     /// n_c·y_a and S⁻¹·Yᵀ·f_c of a port block (dampers only).
     fn prepare_damper_ports(&self, ports: &mut PortBlock) {
         let nt = self.att.len();
@@ -695,6 +693,8 @@ impl Newmark {
         }
     }
 
+    /// Prepares the port vectors set this step: forward substitution, or the cached columns
+    /// of A⁻¹ they need.
     pub fn prepare_ports(&mut self, ports: &mut PortBlock) {
         self.prepare_damper_ports(ports);
         if let Some(cache) = &mut self.columns {

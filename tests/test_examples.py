@@ -1,0 +1,70 @@
+"""The example configurations shipped in the package (``vtb/examples/*.toml``): present in the
+installed package, loadable, and the article examples equal to the presets they document."""
+
+import math
+
+import numpy as np
+import pytest
+
+import vtb
+from vtb import cli
+
+NAMES = ["article", "article_fem", "article_tids", "two_span_sato"]
+
+
+def _close(a, b):
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
+    if isinstance(a, float):
+        return math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-12)
+    return a == b
+
+
+def test_examples_are_shipped_and_described():
+    ex = vtb.examples()
+    assert sorted(ex) == NAMES
+    assert all(len(text) > 40 for text in ex.values())
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_example_builds_its_model(name):
+    cfg = vtb.example_config(name)
+    mats = vtb.assembled_matrices(cfg)
+    for key in ("m", "k"):
+        a = mats[key]
+        assert np.all(np.isfinite(a)) and np.allclose(a, a.T, rtol=0, atol=1e-9 * np.abs(a).max())
+
+
+def test_article_examples_are_the_documented_presets():
+    paper = vtb.paper_config(calibrated=True)
+    assert _close(vtb.example_config("article").to_dict(), paper.to_dict())
+    paper.tids = vtb.tids_around(paper)
+    assert _close(vtb.example_config("article_tids").to_dict(), paper.to_dict())
+    fem = vtb.example_config("article_fem")
+    assert fem.discretisation.method == "fem" and fem.discretisation.fem_elements == 251
+    fem.discretisation = vtb.paper_config().discretisation
+    paper.tids = None
+    assert _close(fem.to_dict(), paper.to_dict())
+
+
+def test_unknown_example_names_the_field():
+    with pytest.raises(vtb.ConfigError) as e:
+        vtb.example_config("nope")
+    assert e.value.field == "example" and "article" in str(e.value)
+
+
+def test_cli_lists_prints_and_runs_examples(tmp_path, capsys):
+    assert cli.main(["examples"]) == 0
+    listed = capsys.readouterr().out
+    assert all(name in listed for name in NAMES)
+    assert cli.main(["examples", "two_span_sato"]) == 0
+    text = capsys.readouterr().out
+    assert _close(vtb.Config.from_toml(text).to_dict(), vtb.example_config("two_span_sato").to_dict())
+    assert cli.main(["examples", "nope"]) == 2
+    assert "example" in capsys.readouterr().err
+    out = tmp_path / "run"
+    assert cli.main(["simulate", "--config", "two_span_sato", "--out", str(out), "--no-plot"]) == 0
+    metrics = capsys.readouterr().out
+    assert "rail_acc_max" in metrics and (out / "result.npz").is_file()
