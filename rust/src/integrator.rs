@@ -292,8 +292,8 @@ struct Attached {
     alpha_s: Vec<f64>,
     k: Vec<f64>,
     b: Vec<f64>,
-    /// Y = A₀⁻¹·w_i, also as rows (`yt[k·N_t + i]`), and for forward ports D⁻¹·L⁻¹·P·w_i.
-    y: Vec<Vec<f64>>,
+    /// Y = A₀⁻¹·W by rows (`yt[k·N_t + i]` = (A₀⁻¹·w_i)_k), and for forward ports
+    /// D⁻¹·L⁻¹·P·w_i.
     yt: Vec<f64>,
     lw: Vec<Vec<f64>>,
     /// S⁻¹ (row-major, N_t × N_t).
@@ -477,6 +477,7 @@ impl Newmark {
         let mut att = Attached::default();
         let mut kappa = Vec::with_capacity(nt);
         let (mut uppers, mut lowers) = (Vec::with_capacity(nt), Vec::with_capacity(nt));
+        let mut y = Vec::with_capacity(nt);
         for (i, a) in attachments.iter().enumerate() {
             let (up, lo) = (self.vector(&a.upper), self.vector(&a.lower));
             let mut e = vec![0.0; ns];
@@ -491,7 +492,7 @@ impl Newmark {
                     .push(e.iter().zip(f.d_inv()).map(|(v, d)| v * d).collect());
                 f.diag_backward(&mut e);
             }
-            att.y.push(e);
+            y.push(e);
             uppers.push(up);
             lowers.push(lo);
             att.node.push(ns + i);
@@ -518,16 +519,14 @@ impl Newmark {
             *v = vec![0.0; nt];
         }
         let mut sm = vec![0.0; nt * nt];
-        for j in 0..nt {
-            let yj = std::mem::take(&mut att.y[j]);
-            att.w_dots(&yj);
-            att.y[j] = yj;
+        for (j, yj) in y.iter().enumerate() {
+            att.w_dots(yj);
             for i in 0..nt {
                 sm[i * nt + j] = att.wz[i] + if i == j { 1.0 / kappa[i] } else { 0.0 };
             }
         }
         att.s_inv = invert_spd(&sm, nt)?;
-        att.yt = (0..ns * nt).map(|q| att.y[q % nt][q / nt]).collect();
+        att.yt = (0..ns * nt).map(|q| y[q % nt][q / nt]).collect();
         self.att = att;
         Ok(())
     }
