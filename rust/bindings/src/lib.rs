@@ -3,7 +3,7 @@
 //! classes of `vtb.errors`, and runs the work with the GIL released on a worker thread while
 //! the calling thread watches for Ctrl-C and reports progress.
 
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -230,6 +230,51 @@ fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// Shape vectors of layer `layer` (index, top = 0) at the positions `xs` (m), in the
+/// structure's DOF numbering: (starts, values) with values of shape (len(xs), width); row i is
+/// nonzero on the DOFs starts[i] .. starts[i] + width. The hybrid rail's vectors carry the
+/// FE–SEA correction, exactly as the wheels and the outputs see them.
+#[pyfunction]
+fn shapes<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    layer: usize,
+    xs: PyReadonlyArray1<'_, f64>,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let st = &model.structure;
+    if layer >= st.layers.len() {
+        return Err(to_py_err(
+            py,
+            VtbError::config("layer", layer, "no such layer index"),
+        ));
+    }
+    let xs = xs
+        .as_slice()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let width = st.layers[layer].basis.shape_len();
+    let mut starts = Vec::with_capacity(xs.len());
+    let mut values = Vec::with_capacity(xs.len() * width);
+    for (i, &x) in xs.iter().enumerate() {
+        if !(x.is_finite() && (0.0..=st.length).contains(&x)) {
+            return Err(to_py_err(
+                py,
+                VtbError::config(
+                    &format!("x[{i}]"),
+                    x,
+                    "must lie on the structure, 0 ≤ x ≤ L",
+                ),
+            ));
+        }
+        let s = st.shape(layer, x);
+        starts.push(s.start as i64);
+        values.extend_from_slice(&s.values);
+    }
+    let values = PyArray1::from_vec(py, values).reshape([xs.len(), width])?;
+    Ok((PyArray1::from_vec(py, starts), values))
+}
+
 /// The FE–SEA correction of a hybrid configuration: ω_r, the resonant band, the modal
 /// density, ΔM/ΔK/ΔC on the rail's cubic DOFs and every local mode's properties.
 #[pyfunction]
@@ -384,6 +429,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(matrices, m)?)?;
     m.add_function(wrap_pyfunction!(fesea, m)?)?;
+    m.add_function(wrap_pyfunction!(shapes, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
