@@ -51,7 +51,8 @@ Damping = Union[RayleighRatio, RayleighCoefficients]
 
 @dataclass
 class Layer:
-    """An Euler–Bernoulli beam layer (rail, slab, base, girder …)."""
+    """A beam layer (rail, slab, base, girder …): Euler–Bernoulli, or Timoshenko when
+    ``shear_modulus`` and ``shear_coefficient`` are given."""
 
     name: str
     density: float  #: ρ (kg/m³)
@@ -61,6 +62,14 @@ class Layer:
     modes: int  #: sine modes of the modal basis (4 boundary functions come on top)
     damping: Damping
     local_modes: int = 0  #: extra sine modes treated as local (FE–SEA) modes by the hybrid method
+    #: shear modulus G (Pa); with ``shear_coefficient`` the layer is a Timoshenko beam (shear
+    #: deformation and rotary inertia ρI), finite-element method only
+    shear_modulus: Optional[float] = None
+    shear_coefficient: Optional[float] = None  #: shear coefficient κ (−); ≈ 0.4 for a rail in vertical bending
+    #: longest finite element (m) of this layer; its nodes then fall on every discrete coupling
+    #: point of the layer (fasteners, piers, dampers). ``None``: ``discretisation.fem_elements``
+    #: equal elements, wherever the couplings fall
+    element_length: Optional[float] = None
 
 
 @dataclass

@@ -491,50 +491,139 @@ impl ModalBasis {
     }
 }
 
-/// Uniform mesh of cubic Hermite beam elements; node i has DOFs (2i: displacement,
-/// 2i+1: rotation).
+/// A finite-element mesh of beam elements with two DOFs per node: node i has DOFs 2i
+/// (displacement w, positive downward) and 2i+1 (rotation: w′ for Euler–Bernoulli, the
+/// cross-section rotation ψ for Timoshenko). Nodes may be spaced unevenly (they are placed on
+/// the coupling points of the layer, see `FemBasis::aligned`).
+///
+/// Each element interpolates w with the *interdependent* cubics of a Timoshenko element
+/// (w cubic, ψ quadratic, their coefficients tied so that the shear strain γ = w′ − ψ is
+/// constant and the homogeneous static equations hold exactly): free of shear locking, exact
+/// nodal values for static point loads, and equal to the cubic Hermite functions when the
+/// element's shear parameter φ = 12EI/(κGAℓ²) is 0 (Euler–Bernoulli).
 #[derive(Clone, Debug)]
 pub struct FemBasis {
     pub length: f64,
-    pub n_elements: usize,
+    /// Node positions, increasing, from 0 to `length`.
+    pub nodes: Vec<f64>,
+    /// Shear parameter φ of each element (0 for Euler–Bernoulli).
+    pub phi: Vec<f64>,
 }
 
 impl FemBasis {
+    /// `n` equal elements.
+    pub fn uniform(length: f64, n: usize) -> Self {
+        let nodes = (0..=n)
+            .map(|i| if i == n { length } else { length * i as f64 / n as f64 })
+            .collect();
+        Self {
+            length,
+            nodes,
+            phi: vec![0.0; n],
+        }
+    }
+
+    /// Nodes on every breakpoint (coupling points; 0 and `length` are added) and each
+    /// interval between breakpoints split into the fewest equal elements no longer than
+    /// `max_len`. Breakpoints closer than 1e-9·length merge.
+    pub fn aligned(length: f64, max_len: f64, breakpoints: &[f64]) -> Self {
+        let tol = 1e-9 * length;
+        let mut bp: Vec<f64> = breakpoints
+            .iter()
+            .copied()
+            .filter(|&x| x > tol && x < length - tol)
+            .collect();
+        bp.sort_by(f64::total_cmp);
+        let mut nodes = vec![0.0];
+        for &x in bp.iter().chain(std::iter::once(&length)) {
+            let a = *nodes.last().expect("starts with 0");
+            if x - a <= tol {
+                continue;
+            }
+            let n = ((x - a) / max_len * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+            nodes.extend((1..=n).map(|k| if k == n { x } else { a + (x - a) * k as f64 / n as f64 }));
+        }
+        let n = nodes.len() - 1;
+        Self {
+            length,
+            nodes,
+            phi: vec![0.0; n],
+        }
+    }
+
+    /// Makes the elements Timoshenko elements of a beam with bending stiffness `ei` and shear
+    /// stiffness `kga` = κGA.
+    pub fn with_shear(mut self, ei: f64, kga: f64) -> Self {
+        for e in 0..self.n_elements() {
+            let l = self.nodes[e + 1] - self.nodes[e];
+            self.phi[e] = 12.0 * ei / (kga * l * l);
+        }
+        self
+    }
+
+    pub fn n_elements(&self) -> usize {
+        self.nodes.len() - 1
+    }
+
     pub fn n_dofs(&self) -> usize {
-        2 * (self.n_elements + 1)
+        2 * self.nodes.len()
     }
 
-    pub fn element_length(&self) -> f64 {
-        self.length / self.n_elements as f64
-    }
-
-    /// Element containing x (the last element owns x = L).
+    /// Element containing x (an element owns its left node; the last one also owns x = L).
     #[inline]
     pub fn element_of(&self, x: f64) -> usize {
-        ((x / self.element_length()).floor().max(0.0) as usize).min(self.n_elements - 1)
+        let ne = self.n_elements();
+        self.nodes.partition_point(|&n| n <= x).saturating_sub(1).min(ne - 1)
+    }
+
+    /// (w, ψ) interpolation of element e as polynomials in ξ = x − x_e: the displacement
+    /// functions and the rotation functions of its four DOFs.
+    pub fn element_funcs(&self, e: usize) -> ([Func; 4], [Func; 4]) {
+        let (a, l) = (self.nodes[e], self.nodes[e + 1] - self.nodes[e]);
+        let [w, psi] = interdependent(l, self.phi[e]);
+        let f = |c: [f64; 4]| Func::Poly { origin: a, c };
+        (w.map(f), psi.map(f))
     }
 
     pub fn pieces(&self) -> Vec<Piece> {
-        let le = self.element_length();
-        (0..self.n_elements)
-            .map(|e| {
-                let a = e as f64 * le;
-                Piece {
-                    a,
-                    b: if e + 1 == self.n_elements {
-                        self.length
-                    } else {
-                        a + le
-                    },
-                    funcs: hermite(a, le)
-                        .into_iter()
-                        .enumerate()
-                        .map(|(j, f)| (2 * e + j, f))
-                        .collect(),
-                }
+        (0..self.n_elements())
+            .map(|e| Piece {
+                a: self.nodes[e],
+                b: self.nodes[e + 1],
+                funcs: self
+                    .element_funcs(e)
+                    .0
+                    .into_iter()
+                    .enumerate()
+                    .map(|(j, f)| (2 * e + j, f))
+                    .collect(),
             })
             .collect()
     }
+}
+
+/// Coefficients (in powers of ξ, 0 ≤ ξ ≤ ℓ) of the interdependent-interpolation element:
+/// [w functions, ψ functions] of the DOFs (w₁, ψ₁, w₂, ψ₂), μ = 1/(1 + φ), s = ξ/ℓ:
+///   w:  μ(2s³ − 3s² − φs + 1 + φ),  ℓμ(s³ − (2 + φ/2)s² + (1 + φ/2)s),
+///       −μ(2s³ − 3s² − φs),          ℓμ(s³ − (1 − φ/2)s² − (φ/2)s);
+///   ψ:  (6μ/ℓ)(s² − s),  μ(3s² − (4 + φ)s + 1 + φ),  −(6μ/ℓ)(s² − s),  μ(3s² − (2 − φ)s).
+fn interdependent(l: f64, phi: f64) -> [[[f64; 4]; 4]; 2] {
+    let mu = 1.0 / (1.0 + phi);
+    // Polynomials in s, then scaled to powers of ξ = ℓ·s.
+    let ws = [
+        [1.0 + phi, -phi, -3.0, 2.0].map(|c| mu * c),
+        [0.0, 1.0 + 0.5 * phi, -(2.0 + 0.5 * phi), 1.0].map(|c| l * mu * c),
+        [0.0, phi, 3.0, -2.0].map(|c| mu * c),
+        [0.0, -0.5 * phi, -(1.0 - 0.5 * phi), 1.0].map(|c| l * mu * c),
+    ];
+    let ps = [
+        [0.0, -1.0, 1.0, 0.0].map(|c| 6.0 * mu / l * c),
+        [1.0 + phi, -(4.0 + phi), 3.0, 0.0].map(|c| mu * c),
+        [0.0, 1.0, -1.0, 0.0].map(|c| 6.0 * mu / l * c),
+        [0.0, -(2.0 - phi), 3.0, 0.0].map(|c| mu * c),
+    ];
+    let scale = |p: [f64; 4]| [p[0], p[1] / l, p[2] / (l * l), p[3] / (l * l * l)];
+    [ws.map(scale), ps.map(scale)]
 }
 
 /// The basis of one layer.
@@ -579,10 +668,12 @@ impl LayerBasis {
             }
             LayerBasis::Fem(b) => {
                 let e = b.element_of(x);
-                let le = b.element_length();
+                let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
                 out.start = 2 * e;
-                out.values
-                    .copy_from_slice(&hermite_values(x - e as f64 * le, le));
+                let xi = x - a;
+                for (o, c) in out.values.iter_mut().zip(&interdependent(l, b.phi[e])[0]) {
+                    *o = c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]));
+                }
             }
         }
     }

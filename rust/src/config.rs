@@ -61,6 +61,18 @@ pub struct LayerConfig {
     /// Extra sine modes treated as local (FE–SEA) modes by the hybrid method.
     #[serde(default)]
     pub local_modes: usize,
+    /// Shear modulus G (Pa). Given with `shear_coefficient`, the layer is a Timoshenko beam
+    /// (shear deformation and rotary inertia ρI); finite-element method only.
+    #[serde(default)]
+    pub shear_modulus: Option<f64>,
+    /// Shear coefficient κ (−) of the cross-section (a rail in vertical bending: ≈ 0.4).
+    #[serde(default)]
+    pub shear_coefficient: Option<f64>,
+    /// Longest element (m) of this layer's finite-element mesh, whose nodes then fall on every
+    /// discrete coupling point of the layer (fasteners, piers, damper attachments). `None`:
+    /// the uniform mesh of `discretisation.fem_elements` elements.
+    #[serde(default)]
+    pub element_length: Option<f64>,
     pub damping: RayleighConfig,
 }
 
@@ -528,6 +540,7 @@ impl Config {
             positive(&format!("{p}.area"), l.area)?;
             positive(&format!("{p}.youngs_modulus"), l.youngs_modulus)?;
             positive(&format!("{p}.inertia"), l.inertia)?;
+            self.validate_layer_mesh(l, &p, length)?;
             if self.discretisation.method != Method::Fem {
                 if l.modes == 0 {
                     return Err(VtbError::config(
@@ -815,6 +828,49 @@ impl Config {
         }
         if let Some(t) = &self.tids {
             self.validate_tids(t, length)?;
+        }
+        Ok(())
+    }
+
+    /// Timoshenko properties (both or neither, finite elements only) and the element length.
+    fn validate_layer_mesh(&self, l: &LayerConfig, p: &str, length: f64) -> Result<()> {
+        let fem = self.discretisation.method == Method::Fem;
+        match (l.shear_modulus, l.shear_coefficient) {
+            (None, None) => {}
+            (Some(g), Some(k)) => {
+                positive(&format!("{p}.shear_modulus"), g)?;
+                positive(&format!("{p}.shear_coefficient"), k)?;
+                if !fem {
+                    return Err(VtbError::config(
+                        format!("{p}.shear_modulus"),
+                        format!("{g:?}"),
+                        "Timoshenko layers need discretisation.method = \"fem\" (the modal \
+                         basis is Euler–Bernoulli)",
+                    ));
+                }
+            }
+            (g, _) => {
+                let (field, other) = if g.is_none() {
+                    ("shear_modulus", "shear_coefficient")
+                } else {
+                    ("shear_coefficient", "shear_modulus")
+                };
+                return Err(VtbError::config(
+                    format!("{p}.{field}"),
+                    "None",
+                    format!("a Timoshenko layer needs both shear_modulus and shear_coefficient ({other} is set)"),
+                ));
+            }
+        }
+        if let Some(h) = l.element_length {
+            let h = positive(&format!("{p}.element_length"), h)?;
+            if length / h > MAX_ELEMENTS as f64 {
+                return Err(VtbError::config(
+                    format!("{p}.element_length"),
+                    format!("{h:?}"),
+                    format!("gives more than {MAX_ELEMENTS} elements"),
+                ));
+            }
         }
         Ok(())
     }

@@ -1,6 +1,7 @@
-//! Beam layers (rail, slab, base, girder …): Euler–Bernoulli properties, the basis of each
-//! layer, and the exact Gram blocks ∫N·Nᵀ and ∫N″·N″ᵀ from which mass, stiffness, Rayleigh
-//! damping and continuous couplings are built.
+//! Beam layers (rail, slab, base, girder …): Euler–Bernoulli or Timoshenko properties, the
+//! basis of each layer, the exact Gram blocks ∫N·Nᵀ and ∫N″·N″ᵀ from which modal mass,
+//! stiffness, Rayleigh damping and continuous couplings are built, and the element matrices
+//! of finite-element layers.
 
 use crate::basis::{FemBasis, Func, LayerBasis, ModalBasis, Piece, Shape, integrate};
 use crate::config::{LayerConfig, Method};
@@ -14,25 +15,55 @@ pub struct Layer {
     /// ρA (kg/m) and EI (N·m²).
     pub rho_a: f64,
     pub ei: f64,
+    /// Timoshenko layers: shear stiffness κGA (N) and rotary inertia ρI (kg·m); `None` for
+    /// Euler–Bernoulli.
+    pub shear: Option<Shear>,
     /// Rayleigh coefficients α (1/s), β (s).
     pub alpha: f64,
     pub beta: f64,
 }
 
+/// Shear properties of a Timoshenko layer.
+#[derive(Clone, Copy, Debug)]
+pub struct Shear {
+    /// κGA (N).
+    pub kga: f64,
+    /// ρI (kg·m).
+    pub rho_i: f64,
+}
+
 impl Layer {
+    /// A layer of a validated config. Finite-element layers with an `element_length` get nodes
+    /// on `breakpoints` (the layer's coupling points); the others a uniform mesh of
+    /// `fem_elements`.
     pub fn new(
         cfg: &LayerConfig,
         length: f64,
         method: Method,
         fem_elements: usize,
+        breakpoints: &[f64],
         offset: usize,
     ) -> Self {
         let rho_a = cfg.density * cfg.area;
-        let basis = match method {
-            Method::Fem => LayerBasis::Fem(FemBasis {
-                length,
-                n_elements: fem_elements,
+        let ei = cfg.youngs_modulus * cfg.inertia;
+        let shear = match (cfg.shear_modulus, cfg.shear_coefficient) {
+            (Some(g), Some(k)) => Some(Shear {
+                kga: k * g * cfg.area,
+                rho_i: cfg.density * cfg.inertia,
             }),
+            _ => None,
+        };
+        let basis = match method {
+            Method::Fem => {
+                let mesh = match cfg.element_length {
+                    Some(h) => FemBasis::aligned(length, h, breakpoints),
+                    None => FemBasis::uniform(length, fem_elements),
+                };
+                LayerBasis::Fem(match shear {
+                    Some(s) => mesh.with_shear(ei, s.kga),
+                    None => mesh,
+                })
+            }
             Method::Modal | Method::Hybrid => {
                 LayerBasis::Modal(ModalBasis::new(length, rho_a, cfg.modes))
             }
@@ -43,10 +74,52 @@ impl Layer {
             basis,
             offset,
             rho_a,
-            ei: cfg.youngs_modulus * cfg.inertia,
+            ei,
+            shear,
             alpha,
             beta,
         }
+    }
+
+    /// Mass and stiffness matrices of every element of a finite-element layer (structure
+    /// numbering, row-major 4 × 4 over the element's DOFs w₁, θ₁, w₂, θ₂):
+    /// M = ρA∫N_w N_wᵀ (+ ρI∫N_ψ N_ψᵀ), K = EI∫N_ψ′ N_ψ′ᵀ (+ κGA∫γ γᵀ, γ = N_w′ − N_ψ), with
+    /// N_ψ = N_w′ for Euler–Bernoulli. All integrands are polynomials, integrated exactly.
+    pub fn element_matrices(&self) -> Vec<([usize; 4], [f64; 16], [f64; 16])> {
+        let LayerBasis::Fem(mesh) = &self.basis else {
+            return Vec::new();
+        };
+        (0..mesh.n_elements())
+            .map(|e| {
+                let (a, b) = (mesh.nodes[e], mesh.nodes[e + 1]);
+                let (w, psi) = mesh.element_funcs(e);
+                let (mut m, mut k) = ([0.0; 16], [0.0; 16]);
+                for i in 0..4 {
+                    for j in i..4 {
+                        let (mij, kij) = match self.shear {
+                            None => (
+                                self.rho_a * integrate(&w[i], &w[j], a, b),
+                                self.ei * integrate(&w[i].d2(), &w[j].d2(), a, b),
+                            ),
+                            Some(s) => {
+                                let gi = sub(w[i].d1(), psi[i]);
+                                let gj = sub(w[j].d1(), psi[j]);
+                                (
+                                    self.rho_a * integrate(&w[i], &w[j], a, b)
+                                        + s.rho_i * integrate(&psi[i], &psi[j], a, b),
+                                    self.ei * integrate(&psi[i].d1(), &psi[j].d1(), a, b)
+                                        + s.kga * integrate(&gi, &gj, a, b),
+                                )
+                            }
+                        };
+                        (m[4 * i + j], m[4 * j + i]) = (mij, mij);
+                        (k[4 * i + j], k[4 * j + i]) = (kij, kij);
+                    }
+                }
+                let d0 = self.offset + 2 * e;
+                ([d0, d0 + 1, d0 + 2, d0 + 3], m, k)
+            })
+            .collect()
     }
 
     pub fn n_dofs(&self) -> usize {
@@ -64,6 +137,17 @@ impl Layer {
         let mut s = self.basis.shape(x);
         s.start += self.offset;
         s
+    }
+}
+
+/// f − g of two polynomials on the same origin.
+fn sub(f: Func, g: Func) -> Func {
+    match (f, g) {
+        (Func::Poly { origin, c: a }, Func::Poly { c: b, .. }) => Func::Poly {
+            origin,
+            c: std::array::from_fn(|i| a[i] - b[i]),
+        },
+        _ => unreachable!("element functions are polynomials"),
     }
 }
 
@@ -151,12 +235,113 @@ mod tests {
             inertia: 3.217e-5,
             modes,
             local_modes: 0,
+            shear_modulus: None,
+            shear_coefficient: None,
+            element_length: None,
             damping: RayleighConfig::Coefficients {
                 alpha: 0.0,
                 beta: 0.0,
             },
         };
-        Layer::new(&cfg, 32.0, method, 40, 0)
+        Layer::new(&cfg, 32.0, method, 40, &[], 0)
+    }
+
+    fn timoshenko(kg: f64) -> Layer {
+        let cfg = LayerConfig {
+            name: "rail".into(),
+            density: 7800.0,
+            area: 7.745e-3,
+            youngs_modulus: 2.1e11,
+            inertia: 3.217e-5,
+            modes: 0,
+            local_modes: 0,
+            shear_modulus: Some(kg / 0.4),
+            shear_coefficient: Some(0.4),
+            element_length: Some(0.08),
+            damping: RayleighConfig::Coefficients {
+                alpha: 0.0,
+                beta: 0.0,
+            },
+        };
+        Layer::new(&cfg, 32.0, Method::Fem, 0, &[0.1, 0.74], 0)
+    }
+
+    /// The interdependent-interpolation element's stiffness equals the closed form of the
+    /// exact Timoshenko beam element (Przemieniecki; Friedman & Kosmatka 1993):
+    /// EI/((1+φ)ℓ³)·[12, 6ℓ, −12, 6ℓ; 6ℓ, (4+φ)ℓ², −6ℓ, (2−φ)ℓ²; …], φ = 12EI/(κGAℓ²).
+    #[test]
+    fn timoshenko_element_stiffness_matches_closed_form() {
+        let l = timoshenko(8.1e10);
+        let LayerBasis::Fem(mesh) = &l.basis else {
+            unreachable!()
+        };
+        for (e, (dofs, _, k)) in l.element_matrices().into_iter().enumerate() {
+            let le = mesh.nodes[e + 1] - mesh.nodes[e];
+            let phi = 12.0 * l.ei / (l.shear.unwrap().kga * le * le);
+            let c = l.ei / ((1.0 + phi) * le.powi(3));
+            let (a, b, d) = (6.0 * le, (4.0 + phi) * le * le, (2.0 - phi) * le * le);
+            let kk = [
+                12.0, a, -12.0, a, a, b, -a, d, -12.0, -a, 12.0, -a, a, d, -a, b,
+            ];
+            assert_eq!(dofs[0], 2 * e);
+            for i in 0..16 {
+                assert!(
+                    (k[i] - c * kk[i]).abs() < 1e-9 * c * 12.0,
+                    "e={e} k[{i}] {} {}",
+                    k[i],
+                    c * kk[i]
+                );
+            }
+        }
+    }
+
+    /// Nodes fall on the breakpoints and no element is longer than the element length.
+    #[test]
+    fn aligned_mesh_has_nodes_on_coupling_points() {
+        let l = timoshenko(8.1e10);
+        let LayerBasis::Fem(mesh) = &l.basis else {
+            unreachable!()
+        };
+        for bp in [0.0, 0.1, 0.74, 32.0] {
+            assert!(mesh.nodes.iter().any(|&n| (n - bp).abs() < 1e-12), "{bp}");
+        }
+        assert!(mesh.nodes.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= 0.08 + 1e-12));
+        // [0, 0.1] → 2 elements, [0.1, 0.74] → 8, [0.74, 32] → 391.
+        assert_eq!(mesh.n_elements(), 2 + 8 + 391);
+    }
+
+    /// κG → ∞ recovers the Euler–Bernoulli element: stiffness to round-off, mass up to the
+    /// rotary inertia ρI∫N_w′N_w′ᵀ.
+    #[test]
+    fn timoshenko_element_tends_to_euler_bernoulli() {
+        let t = timoshenko(1e30);
+        let mut eb = timoshenko(1.0);
+        eb.shear = None;
+        if let LayerBasis::Fem(m) = &mut eb.basis {
+            m.phi.iter_mut().for_each(|p| *p = 0.0);
+        }
+        let rho_i = t.shear.unwrap().rho_i;
+        let LayerBasis::Fem(mesh) = &t.basis else {
+            unreachable!()
+        };
+        for (e, ((_, mt, kt), (_, me, ke))) in t
+            .element_matrices()
+            .into_iter()
+            .zip(eb.element_matrices())
+            .enumerate()
+        {
+            let (a, b) = (mesh.nodes[e], mesh.nodes[e + 1]);
+            let h = crate::basis::hermite(a, b - a);
+            for i in 0..4 {
+                for j in 0..4 {
+                    let kref = ke[4 * i + j];
+                    assert!((kt[4 * i + j] - kref).abs() < 1e-9 * ke[0], "k {i}{j}");
+                    let rot = rho_i * integrate(&h[i].d1(), &h[j].d1(), a, b);
+                    let mref = me[4 * i + j] + rot;
+                    assert!((mt[4 * i + j] - mref).abs() < 1e-9 * me[0], "m {i}{j}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -75,6 +75,9 @@ pub fn table1_structure() -> StructureConfig {
         inertia: i,
         modes,
         local_modes,
+        shear_modulus: None,
+        shear_coefficient: None,
+        element_length: None,
         damping,
     };
     let fasteners: Vec<f64> = (0..=250).map(|i| 0.64 * i as f64).collect();

@@ -174,21 +174,22 @@ impl Structure {
     }
 
     /// The unknowns grouped by mesh node (every layer's DOFs at node j) when all layers are
-    /// finite-element meshes of the same size: the grouping in which the matrices are block
+    /// finite-element meshes with the same nodes: the grouping in which the matrices are block
     /// tridiagonal.
     pub fn node_blocks(&self) -> Option<Vec<Vec<usize>>> {
-        let meshes: Vec<usize> = self
+        let meshes: Vec<&[f64]> = self
             .layers
             .iter()
             .map(|l| match &l.basis {
-                LayerBasis::Fem(f) => Some(f.n_elements),
+                LayerBasis::Fem(f) => Some(f.nodes.as_slice()),
                 LayerBasis::Modal(_) => None,
             })
             .collect::<Option<_>>()?;
-        let ne = *meshes.first()?;
-        if meshes.iter().any(|&m| m != ne) {
+        let first = *meshes.first()?;
+        if meshes.iter().any(|&m| m != first) {
             return None;
         }
+        let ne = first.len() - 1;
         Some(
             (0..=ne)
                 .map(|j| {
@@ -256,6 +257,7 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
                 s.length,
                 cfg.discretisation.method,
                 cfg.discretisation.fem_elements,
+                &coupling_points(cfg, &lc.name),
                 offset,
             );
             offset += layer.n_dofs();
@@ -264,11 +266,35 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
         .collect()
 }
 
+/// The points where discrete couplings and dampers attach to the layer `name`: the nodes of
+/// an aligned finite-element mesh.
+fn coupling_points(cfg: &Config, name: &str) -> Vec<f64> {
+    let mut pts: Vec<f64> = cfg
+        .structure
+        .couplings
+        .iter()
+        .filter(|c| c.kind == CouplingKind::Discrete && (c.upper == name || c.lower == name))
+        .flat_map(|c| c.positions.iter().copied())
+        .collect();
+    if let Some(t) = cfg.tids.as_ref().filter(|t| t.upper == name || t.lower == name) {
+        pts.extend((0..t.count).map(|i| t.x0 + i as f64 * t.spacing));
+    }
+    pts
+}
+
 /// M, K and C of the layers and couplings.
 fn assemble(cfg: &Config, layers: &[Layer]) -> [Assembler; 3] {
     let n = layers.iter().map(Layer::n_dofs).sum();
     let (mut am, mut ak, mut ac) = (Assembler::new(n), Assembler::new(n), Assembler::new(n));
-    for l in layers {
+    for l in layers.iter().filter(|l| matches!(l.basis, LayerBasis::Fem(_))) {
+        for (dofs, m, k) in l.element_matrices() {
+            let c: [f64; 16] = std::array::from_fn(|i| l.alpha * m[i] + l.beta * k[i]);
+            am.add_block(&dofs, &m, 1.0);
+            ak.add_block(&dofs, &k, 1.0);
+            ac.add_block(&dofs, &c, 1.0);
+        }
+    }
+    for l in layers.iter().filter(|l| matches!(l.basis, LayerBasis::Modal(_))) {
         for (blocks, coef_m, coef_k) in [
             (gram_blocks(l, l, Derivative::Value), l.rho_a, 0.0),
             (gram_blocks(l, l, Derivative::Curvature), 0.0, l.ei),
