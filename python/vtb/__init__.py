@@ -32,6 +32,7 @@ from .irregularity import Irregularity
 from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
 from .simulate import Result, assembled_matrices, irregularity_profile, simulate, simulate_batch
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
+from .track import Modes, decay_rate, modes, receptance
 from .optimize import OptimizationResult, optimize
 
 __all__ = [
@@ -40,4 +41,5 @@ __all__ = [
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
+    "receptance", "decay_rate", "modes", "Modes",
 ]

@@ -119,6 +119,11 @@ class Discretisation:
     #: Hybrid: add the local modes' static deflection under the rail loads to the rail's
     #: displacement outputs (docs/fesea.md). ``False`` follows model.md §6 literally.
     local_deflection: bool = True
+    #: finite-element rails: each wheel also sees the static deflection of the rail element under
+    #: it with the element's nodes fixed (in series with the contact), which the element's
+    #: interpolation misses; keeps the static wheel–rail stiffness independent of the wheel's
+    #: position in its element
+    element_flexibility: bool = True
 
 
 @dataclass

@@ -514,7 +514,13 @@ impl FemBasis {
     /// `n` equal elements.
     pub fn uniform(length: f64, n: usize) -> Self {
         let nodes = (0..=n)
-            .map(|i| if i == n { length } else { length * i as f64 / n as f64 })
+            .map(|i| {
+                if i == n {
+                    length
+                } else {
+                    length * i as f64 / n as f64
+                }
+            })
             .collect();
         Self {
             length,
@@ -541,7 +547,13 @@ impl FemBasis {
                 continue;
             }
             let n = ((x - a) / max_len * (1.0 - 1e-12)).ceil().max(1.0) as usize;
-            nodes.extend((1..=n).map(|k| if k == n { x } else { a + (x - a) * k as f64 / n as f64 }));
+            nodes.extend((1..=n).map(|k| {
+                if k == n {
+                    x
+                } else {
+                    a + (x - a) * k as f64 / n as f64
+                }
+            }));
         }
         let n = nodes.len() - 1;
         Self {
@@ -573,7 +585,10 @@ impl FemBasis {
     #[inline]
     pub fn element_of(&self, x: f64) -> usize {
         let ne = self.n_elements();
-        self.nodes.partition_point(|&n| n <= x).saturating_sub(1).min(ne - 1)
+        self.nodes
+            .partition_point(|&n| n <= x)
+            .saturating_sub(1)
+            .min(ne - 1)
     }
 
     /// (w, ψ) interpolation of element e as polynomials in ξ = x − x_e: the displacement
@@ -583,6 +598,33 @@ impl FemBasis {
         let [w, psi] = interdependent(l, self.phi[e]);
         let f = |c: [f64; 4]| Func::Poly { origin: a, c };
         (w.map(f), psi.map(f))
+    }
+
+    /// Static deflection at x under a unit load at x with the nodes of x's element held fixed
+    /// (m/N): the part of a point load's deflection that the element's interpolation cannot
+    /// carry. `ei` = EI; the shear stiffness enters through the elements' φ. Zero on a node.
+    ///
+    /// It is the deflection of the element's span clamped at both ends: with a node at x the
+    /// element splits into two whose end stiffnesses (closed form, exact for Timoshenko
+    /// beams) condense onto x. Euler–Bernoulli: a³b³/(3EIℓ³).
+    pub fn local_flexibility(&self, ei: f64, x: f64) -> f64 {
+        let e = self.element_of(x);
+        let (a, b) = (x - self.nodes[e], self.nodes[e + 1] - x);
+        let l = a + b;
+        if a <= 1e-12 * l || b <= 1e-12 * l {
+            return 0.0;
+        }
+        // φ scales as 1/ℓ²: the sub-elements' φ from the element's.
+        let phi_l2 = self.phi[e] * l * l;
+        let end = |h: f64, sign: f64| {
+            let phi = phi_l2 / (h * h);
+            let c = ei / ((1.0 + phi) * h * h * h);
+            (12.0 * c, sign * 6.0 * h * c, (4.0 + phi) * h * h * c)
+        };
+        // Right end of [x_e, x] and left end of [x, x_e+1].
+        let (ka, kb) = (end(a, -1.0), end(b, 1.0));
+        let (k11, k12, k22) = (ka.0 + kb.0, ka.1 + kb.1, ka.2 + kb.2);
+        k22 / (k11 * k22 - k12 * k12)
     }
 
     pub fn pieces(&self) -> Vec<Piece> {

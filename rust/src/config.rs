@@ -157,6 +157,11 @@ pub struct DiscretisationConfig {
     /// (docs/fesea.md; model.md §6 leaves it out, `false` follows it).
     #[serde(default = "default_true")]
     pub local_deflection: bool,
+    /// Finite-element rails: each wheel also sees the static deflection of the rail element
+    /// under it with the element's nodes fixed (in series with the Hertz contact), which the
+    /// element's interpolation misses (docs/track-models.md).
+    #[serde(default = "default_true")]
+    pub element_flexibility: bool,
 }
 
 fn default_true() -> bool {
@@ -188,6 +193,7 @@ impl Default for DiscretisationConfig {
             omega_r: None,
             fesea_coupling: FeSeaCoupling::Full,
             local_deflection: true,
+            element_flexibility: true,
         }
     }
 }
@@ -858,7 +864,9 @@ impl Config {
                 return Err(VtbError::config(
                     format!("{p}.{field}"),
                     "None",
-                    format!("a Timoshenko layer needs both shear_modulus and shear_coefficient ({other} is set)"),
+                    format!(
+                        "a Timoshenko layer needs both shear_modulus and shear_coefficient ({other} is set)"
+                    ),
                 ));
             }
         }

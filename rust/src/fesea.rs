@@ -442,7 +442,14 @@ mod tests {
         cfg.discretisation.method = Method::Hybrid;
         cfg.discretisation.fesea_coupling = coupling;
         let lc = &cfg.structure.layers[0];
-        let rail = Layer::new(lc, cfg.structure.length, cfg.discretisation.method, 0, &[], 0);
+        let rail = Layer::new(
+            lc,
+            cfg.structure.length,
+            cfg.discretisation.method,
+            0,
+            &[],
+            0,
+        );
         (cfg, rail)
     }
 

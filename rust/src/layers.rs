@@ -305,7 +305,11 @@ mod tests {
         for bp in [0.0, 0.1, 0.74, 32.0] {
             assert!(mesh.nodes.iter().any(|&n| (n - bp).abs() < 1e-12), "{bp}");
         }
-        assert!(mesh.nodes.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= 0.08 + 1e-12));
+        assert!(
+            mesh.nodes
+                .windows(2)
+                .all(|w| w[1] > w[0] && w[1] - w[0] <= 0.08 + 1e-12)
+        );
         // [0, 0.1] → 2 elements, [0.1, 0.74] → 8, [0.74, 32] → 391.
         assert_eq!(mesh.n_elements(), 2 + 8 + 391);
     }

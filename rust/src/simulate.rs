@@ -201,6 +201,8 @@ pub struct Simulation<'m> {
     cars: Vec<CarRun>,
     /// Rail shape vectors at the wheels, one block per car.
     track_ports: Vec<PortBlock>,
+    /// Add the rail elements' local flexibility under the wheels (finite-element rails).
+    element_flexibility: bool,
     contact: ContactSolver,
     /// Contact force of each wheel on the modelled rail (N).
     p: Vec<f64>,
@@ -328,6 +330,7 @@ impl<'m> Simulation<'m> {
             f_next: vec![0.0; n],
             movers,
             track_ports,
+            element_flexibility: cfg.discretisation.element_flexibility,
             cars,
             contact,
             p: vec![0.0; nw],
@@ -527,6 +530,16 @@ impl<'m> Simulation<'m> {
                             };
                             amat[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = g[r][s] + own;
                         }
+                    }
+                }
+                if self.element_flexibility {
+                    // The wheel also deflects the rail within its element (nodes fixed): in
+                    // series with the contact, so the static wheel–rail stiffness does not
+                    // depend on where in an element the wheel is (no element-passing
+                    // excitation from it). Wheels are more than an element apart.
+                    for w in 0..N_WHEELS {
+                        let wi = ci * N_WHEELS + w;
+                        amat[wi * nw + wi] += st.local_flexibility(0, c.car.wheel_x0[w] + v * t1);
                     }
                 }
             }

@@ -224,6 +224,17 @@ impl Structure {
         s
     }
 
+    /// The static flexibility (m/N) at x of layer `layer` that its finite-element
+    /// interpolation misses: the deflection under a unit load at x with the nodes of its
+    /// element fixed (`FemBasis::local_flexibility`); 0 for modal layers.
+    pub fn local_flexibility(&self, layer: usize, x: f64) -> f64 {
+        let l = &self.layers[layer];
+        match &l.basis {
+            LayerBasis::Fem(mesh) => mesh.local_flexibility(l.ei, x),
+            LayerBasis::Modal(_) => 0.0,
+        }
+    }
+
     /// Displacement u_layer(x) for a DOF vector.
     pub fn displacement(&self, layer: usize, x: f64, q: &[f64]) -> f64 {
         dot(&self.shape(layer, x), q)
@@ -276,7 +287,11 @@ fn coupling_points(cfg: &Config, name: &str) -> Vec<f64> {
         .filter(|c| c.kind == CouplingKind::Discrete && (c.upper == name || c.lower == name))
         .flat_map(|c| c.positions.iter().copied())
         .collect();
-    if let Some(t) = cfg.tids.as_ref().filter(|t| t.upper == name || t.lower == name) {
+    if let Some(t) = cfg
+        .tids
+        .as_ref()
+        .filter(|t| t.upper == name || t.lower == name)
+    {
         pts.extend((0..t.count).map(|i| t.x0 + i as f64 * t.spacing));
     }
     pts
@@ -286,7 +301,10 @@ fn coupling_points(cfg: &Config, name: &str) -> Vec<f64> {
 fn assemble(cfg: &Config, layers: &[Layer]) -> [Assembler; 3] {
     let n = layers.iter().map(Layer::n_dofs).sum();
     let (mut am, mut ak, mut ac) = (Assembler::new(n), Assembler::new(n), Assembler::new(n));
-    for l in layers.iter().filter(|l| matches!(l.basis, LayerBasis::Fem(_))) {
+    for l in layers
+        .iter()
+        .filter(|l| matches!(l.basis, LayerBasis::Fem(_)))
+    {
         for (dofs, m, k) in l.element_matrices() {
             let c: [f64; 16] = std::array::from_fn(|i| l.alpha * m[i] + l.beta * k[i]);
             am.add_block(&dofs, &m, 1.0);
@@ -294,7 +312,10 @@ fn assemble(cfg: &Config, layers: &[Layer]) -> [Assembler; 3] {
             ac.add_block(&dofs, &c, 1.0);
         }
     }
-    for l in layers.iter().filter(|l| matches!(l.basis, LayerBasis::Modal(_))) {
+    for l in layers
+        .iter()
+        .filter(|l| matches!(l.basis, LayerBasis::Modal(_)))
+    {
         for (blocks, coef_m, coef_k) in [
             (gram_blocks(l, l, Derivative::Value), l.rho_a, 0.0),
             (gram_blocks(l, l, Derivative::Curvature), 0.0, l.ei),

@@ -172,7 +172,11 @@ fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
         .ok_or_else(|| {
             to_py_err(
                 py,
-                VtbError::config("preset", name, "unknown preset (known: \"paper\")"),
+                VtbError::config(
+                    "preset",
+                    name,
+                    format!("unknown preset (known: {:?})", vtb::presets::PRESETS),
+                ),
             )
         })
 }
