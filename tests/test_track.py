@@ -113,8 +113,8 @@ def test_receptance_of_beam_on_elastic_foundation_matches_infinite_beam(beam):
     at mid-length, vs the infinite beam over 50–3000 Hz: within 1 % (measured: 0.05 % at the
     force, 0.15 % at 10 m). End reflections are negligible: the propagating wave loses
     e^{−Im(k1)·L} < 1e−3 over the round trip to an end and back, and a beam 20 m shorter
-    gives the same point receptance within 0.5 % (measured 0.2 %); halving the elements
-    changes it by < 0.1 %."""
+    gives the same point receptance within 0.5 % (measured 0.14 %); halving the elements
+    changes it by < 0.1 % (measured 0.015 %)."""
     k1, _ = wavenumbers(FREQS)
     assert np.all(np.exp(-np.imag(k1) * BEAM_L) < 1e-3)
 
@@ -153,7 +153,7 @@ def test_static_receptance_matches_hetenyi(beam):
 def test_decay_rate_of_infinite_beam_matches_its_wavenumber(beam):
     """The EN 15461 estimator on the FEM beam vs the same estimator on the infinite beam's
     closed-form receptances at the same positions (within 1 %; measured 0.12 %), vs its
-    integral form in closed form with the default positions (within 1.5 %; measured 0.5 %,
+    integral form in closed form with the default positions (within 1.5 %; measured 0.6 %,
     the trapezoid sum on the geometric grid), and against the wavenumber:
 
     * far from the force the transfer receptance decays at 20·log10(e)·Im(k1) dB/m (its level
@@ -161,7 +161,7 @@ def test_decay_rate_of_infinite_beam_matches_its_wavenumber(beam):
     * above the cut-on frequency, where the propagating wave dominates the sum, the estimator
       tends to 20·log10(e)·Im(k1)·|A(x_0)|²/|a1|² = 2·20·log10(e)·Im(k1): the point receptance
       includes the near field, a1(1 − k1/k2) with |1 − k1/k2|² = 2. Within 6 % for
-      f ≥ 1500 Hz (measured 3–5.5 %, the near-field wave's share of the sum)."""
+      f ≥ 1500 Hz (measured 2.4–5.4 %, the near-field wave's share of the sum)."""
     f = np.array([100.0, 204.0, 300.0, 500.0, 800.0, 1000.0, 1500.0, 2000.0, 3000.0])
     x0 = BEAM_L / 2
     d = np.concatenate(([0.0], np.geomspace(0.01, 40.0, 50)))
@@ -224,7 +224,7 @@ def test_modes_are_found_by_spectrum_slicing_beyond_one_block():
     """More modes than one shift-invert block (40) — a 60 m simply supported beam, 300
     elements, up to 2 kHz (about 120 modes), and a band 500–1500 Hz: exactly the eigenvalues of
     scipy's dense generalised solver on the same assembled matrices, none missed or repeated
-    (within 1e−8)."""
+    (within 1e−8 relative, 1e−6 Hz absolute)."""
     import scipy.linalg
 
     length = 60.0
@@ -238,7 +238,9 @@ def test_modes_are_found_by_spectrum_slicing_beyond_one_block():
         res = vtb.modes(cfg, fmax, fmin=fmin)
         ref = dense[(dense >= fmin) & (dense <= fmax)]
         assert res.method == "shift-invert" and len(res) == ref.size > 40
-        assert np.max(np.abs(res.frequencies / ref - 1)) < 1e-8
+        # The dense solver's eigenvalues carry an absolute error ~ ε·λ_max (here ~1e−7 Hz at
+        # the lowest mode, where shift-invert is the more accurate of the two).
+        assert np.allclose(res.frequencies, ref, rtol=1e-8, atol=1e-6)
 
 
 def two_layer_track(method="fem", tids=False):
