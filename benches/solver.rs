@@ -2,8 +2,10 @@
 //! one car, 80 m/s, Δt = 5e−5 s, ≈ 34 500 steps) on one core, with the irregularity sample
 //! the Python preset generates (benches/data, written by benches/make_fixture.py): the FE–SEA
 //! hybrid (the preset: 120 global + 100 local rail sines, ω_r = 2π·800 Hz), the uncorrected
-//! modal model, the hybrid with the optimisation's 10 TIDs and the conventional finite-element
-//! reference (251 elements per layer).
+//! modal model, the hybrid with the optimisation's 10 TIDs, the conventional finite-element
+//! model (251 elements per layer) and the converged preset (Timoshenko rail 20 elements per
+//! bay with element flexibility, lower layers 0.32 m, Δt = 2.5e−5 s: ≈ 69 000 steps). Compare
+//! `converged_full_run` with `hybrid_full_run` of the same bench run.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::Path;
@@ -25,6 +27,49 @@ fn paper_profile() -> Profile {
         dx: meta["dx"].as_f64().unwrap(),
         values,
     }
+}
+
+/// Unknowns, nonzeros of the stepping matrix A = 2M + ΔtC + Δt²K/2 and of its LDLᵀ factor,
+/// and the half-bandwidth of A in the mesh's natural (by position) numbering.
+fn print_factor_size(cfg: &vtb::config::Config) {
+    let model = Model::new(cfg.clone(), Profile::flat()).unwrap();
+    let st = &model.structure;
+    let (m, c, k) = st.stepping_matrices();
+    let dt = cfg.solver.dt;
+    let a = vtb::sparse::CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
+    let rail: Vec<usize> = (0..st.layers[0].n_dofs())
+        .map(|i| st.layers[0].offset + i)
+        .collect();
+    let f = vtb::sparse::Ldlt::for_stepping(&a, &rail).unwrap();
+    // Position of every unknown: its node's x (finite elements).
+    let mut x = vec![0.0; a.n];
+    for l in &st.layers {
+        if let vtb::basis::LayerBasis::Fem(mesh) = &l.basis {
+            for (i, &xn) in mesh.nodes.iter().enumerate() {
+                x[l.offset + 2 * i] = xn;
+                x[l.offset + 2 * i + 1] = xn;
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..a.n).collect();
+    order.sort_by(|&i, &j| x[i].total_cmp(&x[j]));
+    let mut pos = vec![0; a.n];
+    for (p, &i) in order.iter().enumerate() {
+        pos[i] = p;
+    }
+    let band = (0..a.n)
+        .flat_map(|i| (a.row_ptr[i]..a.row_ptr[i + 1]).map(move |p| (i, p)))
+        .map(|(i, p)| pos[i].abs_diff(pos[a.col_idx[p]]))
+        .max()
+        .unwrap_or(0);
+    println!(
+        "converged preset: {} unknowns, A has {} nonzeros, half-bandwidth {} by position; LDLᵀ factor {} nonzeros ({:.1} per unknown)",
+        a.n,
+        a.nnz(),
+        band,
+        f.nnz_l(),
+        f.nnz_l() as f64 / a.n as f64
+    );
 }
 
 fn bench_paper(c: &mut Criterion) {
@@ -61,6 +106,9 @@ fn bench_paper(c: &mut Criterion) {
     fem.discretisation.method = vtb::config::Method::Fem;
     fem.discretisation.fem_elements = 251;
     g.bench_function("fem251_full_run", |b| b.iter(|| run(&fem)));
+    let converged = presets::paper_converged();
+    print_factor_size(&converged);
+    g.bench_function("converged_full_run", |b| b.iter(|| run(&converged)));
     g.finish();
 }
 
