@@ -53,9 +53,9 @@ def test_moving_force_on_simply_supported_beam_matches_fryba(alpha, published):
     assert daf_sim == pytest.approx(published, rel=0.01)
 
 
-def test_full_history_follows_fryba_series():
-    """Not only the peak: the whole midspan history at α = 0.5 stays within 1 % of w0."""
-    alpha = 0.5
+@pytest.mark.parametrize("alpha", [0.1, 0.5, 1.0])
+def test_full_history_follows_fryba_series(alpha):
+    """Not only the peak: the whole midspan history stays within 1 % of w0."""
     v = alpha * 2 * F1 * L
     t_end = L / v
     n_steps = int(math.ceil(t_end * F1 * 400))
@@ -64,6 +64,79 @@ def test_full_history_follows_fryba_series():
     w0 = P * L**3 / (48 * EI)
     err = np.abs(res.displacement("beam") - fryba_midspan(alpha, res.t)) / w0
     assert err.max() < 0.01
+
+
+def fryba_midspan_acceleration(alpha: float, t: np.ndarray, modes: int = 399, free_below: float = math.inf) -> np.ndarray:
+    """∂²w/∂t²(L/2, t) of Frýba's series, term by term: mode n contributes
+    [−(nω)²·sin(nωt) + (α/n)·ω_n²·sin(ω_n t)]/(n²(n² − α²)), ω = αω₁, ω_n = n²ω₁ (at α = 1 the
+    resonant mode 1 in its limit). The free vibration of modes with ω_n ≥ ``free_below`` is
+    left out: a caller that low-passes far below it removes it anyway, and sampled at the
+    simulation's step it would alias into the band."""
+    w1 = (math.pi / L) ** 2 * math.sqrt(EI / MASS)
+    om = alpha * w1
+    a = np.zeros_like(t)
+    for n in range(1, modes + 1, 2):
+        s = math.sin(n * math.pi / 2)
+        wn = n * n * w1
+        if n == 1 and abs(alpha - 1.0) < 1e-12:
+            term = (w1**2 * np.sin(w1 * t) + w1**3 * t * np.cos(w1 * t)) / 2.0
+        else:
+            term = -((n * om) ** 2) * np.sin(n * om * t)
+            if wn < free_below:
+                term = term + alpha / n * wn**2 * np.sin(wn * t)
+            term = term / (n * n * (n * n - alpha**2))
+        a += s * term
+    return 2 * P * L**3 / (math.pi**4 * EI) * a
+
+
+@pytest.mark.parametrize("alpha", [0.1, 0.5, 1.0])
+def test_midspan_acceleration_matches_fryba(alpha):
+    """The midspan acceleration under a constant force entering at x = 0, with
+    `moving_load_config`'s default start, against Frýba's series differentiated twice.
+
+    The acceleration series converges slowly (the free vibration of mode n adds ~α·ω₁²/n at
+    n²·f1) and no discretisation carries it to the end, so both histories are low-passed by the
+    same zero-phase filter (Butterworth, 4th order, forward and backward) at 15·f1: the band
+    of the free vibration of modes 1 and 3 (f1, 9·f1) and of every mode's forced response
+    (n·α·f1). There the model's 50 sines (+ cubics) and Δt = 1/(2000·f1) resolve it (mode 3:
+    ω·Δt = 0.03, period error 1e-4) and the series is converged (399 vs 199 modes: below
+    3e-6 of the peak). Filtering is linear, so the filtered difference is the model's error in
+    that band. Measured: peak within 0.13 %, normalised RMS error 0.09–0.37 %. Started from
+    rest with the force already on the support (the old default), the step on the stiff
+    support mode (7.6 kHz, ω·Δt ≈ 3.8) gave in the same band +936 %, +36 % and +0.4 % on the
+    peak and 66 %, 20 % and 21 % RMS error.
+    """
+    v = alpha * 2 * F1 * L
+    t_end = L / v
+    n_steps = int(math.ceil(t_end * F1 * 2000))
+    dt = t_end / n_steps
+    cfg = vtb.moving_load_config(L, RHO, AREA, E, INERTIA, [vtb.MovingForce(P, 0.0)], v, modes=50, dt=dt, t_end=t_end, points=[L / 2])
+    res = vtb.simulate(cfg)
+    from scipy.signal import butter, sosfiltfilt
+
+    fc = 15 * F1
+    sos = butter(4, fc, fs=1 / dt, output="sos")
+    sim = sosfiltfilt(sos, res.acceleration("beam"))
+    ref = sosfiltfilt(sos, fryba_midspan_acceleration(alpha, res.t, free_below=2 * math.pi * 10 * fc))
+    assert np.max(np.abs(sim)) == pytest.approx(np.max(np.abs(ref)), rel=0.02)
+    nrmse = np.sqrt(np.mean((sim - ref) ** 2) / np.mean(ref**2))
+    assert nrmse < 0.02
+
+
+def test_moving_load_starts_as_fryba():
+    """The default start (static equilibrium with the force over the support) is Frýba's
+    undeformed beam at rest to about 1e-6 of w0, with zero acceleration; "rest" stays
+    available."""
+    v = 0.5 * 2 * F1 * L
+    cfg = vtb.moving_load_config(L, RHO, AREA, E, INERTIA, [vtb.MovingForce(P, 0.0)], v, dt=1e-4, t_end=1e-3, points=[0.0, L / 2])
+    assert cfg.solver.initial_state == "static"
+    res = vtb.simulate(cfg)
+    w0 = P * L**3 / (48 * EI)
+    for j in (0, 1):
+        assert abs(res.displacement("beam", j)[0]) < 1e-5 * w0
+    assert abs(res.acceleration("beam", 1)[0]) < 1e-9
+    rest = vtb.moving_load_config(L, RHO, AREA, E, INERTIA, [vtb.MovingForce(P, 0.0)], v, initial_state="rest")
+    assert rest.solver.initial_state == "rest"
 
 
 def test_static_deflection_on_winkler_foundation_matches_hetenyi():

@@ -123,13 +123,21 @@ def moving_load_config(
     t_end: Optional[float] = None,
     points: Sequence[float] = (),
     damping: Optional[RayleighCoefficients] = None,
+    initial_state: str = "static",
 ) -> Config:
     """A single beam under constant moving forces (bridge checks; no vehicle).
 
     ``supports``: ``"simply_supported"`` (rigid point supports at both ends),
     ``"winkler"`` (continuous elastic foundation ``support_stiffness`` N/m² with damping) or
-    ``"discrete"`` (springs of ``support_stiffness`` N/m every ``support_spacing`` m). The
-    structure starts undeformed and at rest (Frýba's initial conditions).
+    ``"discrete"`` (springs of ``support_stiffness`` N/m every ``support_spacing`` m).
+
+    ``initial_state``: ``"static"`` (default) starts the structure at rest in equilibrium under
+    the forces at their start positions. A force entering over a support (``x0 = 0`` on a
+    simply supported beam) is carried by that support, so this is Frýba's start — the beam
+    undeformed and at rest — up to the support's compression (about 1e−6 of the midspan
+    deflection). ``"rest"`` starts undeformed with the forces applied suddenly: a step on the
+    stiff supports, whose mode (ω·Δt ≫ 1) the undamped Newmark scheme never lets go of, so
+    the accelerations carry that start for the whole run (docs/model-choices.md).
     """
     if supports == "simply_supported":
         # Point supports 10⁶ times stiffer than the beam's midspan stiffness 48EI/L³: the end
@@ -148,7 +156,7 @@ def moving_load_config(
 
         raise config_error("supports", supports, "must be \"simply_supported\", \"winkler\" or \"discrete\"")
     layer = Layer("beam", density, area, youngs_modulus, inertia, modes, damping or RayleighCoefficients(0.0, 0.0))
-    solver = Solver(initial_state="rest", t_end=t_end)
+    solver = Solver(initial_state=initial_state, t_end=t_end)
     if dt is not None:
         solver.dt = dt
     return Config(structure=Structure(length, [layer], couplings), speed=speed, forces=list(forces), solver=solver, output=__import__("vtb.config", fromlist=["Output"]).Output(list(points)))
