@@ -51,8 +51,8 @@ impl Structure {
                 let rail_dofs = layers[0].n_dofs();
                 let ext = |r: usize| if r < rail_dofs { r } else { r + n_local };
                 // g3, g4 of a modal basis are h2, h4 minus their own sines' content, so the
-                // global g̃3, g̃4 are multiples of the extended basis' g3, g4; g1, g2 are the
-                // same functions in both and take the local terms.
+                // global g̃3, g̃4 are multiples of the extended basis' g3, g4; g1, g2 (the end
+                // displacements, whose sum is the rigid translation) are left unsplit.
                 let ext_rail = &stack(cfg, n_local)[0];
                 let gram = match (&layers[0].basis, &ext_rail.basis) {
                     (LayerBasis::Modal(a), LayerBasis::Modal(b)) => ModalBasis::gram(a, b, false),
