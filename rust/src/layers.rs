@@ -226,14 +226,15 @@ mod tests {
     use super::*;
     use crate::config::RayleighConfig;
 
-    fn layer(method: Method, modes: usize) -> Layer {
-        let cfg = LayerConfig {
+    /// The article's rail as a layer config.
+    fn rail_config() -> LayerConfig {
+        LayerConfig {
             name: "rail".into(),
             density: 7800.0,
             area: 7.745e-3,
             youngs_modulus: 2.1e11,
             inertia: 3.217e-5,
-            modes,
+            modes: 0,
             local_modes: 0,
             shear_modulus: None,
             shear_coefficient: None,
@@ -242,26 +243,25 @@ mod tests {
                 alpha: 0.0,
                 beta: 0.0,
             },
+        }
+    }
+
+    fn layer(method: Method, modes: usize) -> Layer {
+        let cfg = LayerConfig {
+            modes,
+            ..rail_config()
         };
         Layer::new(&cfg, 32.0, method, 40, &[], 0)
     }
 
+    /// A Timoshenko rail of shear stiffness κG = `kg` (κ = 0.4) meshed at 0.08 m with nodes at
+    /// 0.1 and 0.74 m.
     fn timoshenko(kg: f64) -> Layer {
         let cfg = LayerConfig {
-            name: "rail".into(),
-            density: 7800.0,
-            area: 7.745e-3,
-            youngs_modulus: 2.1e11,
-            inertia: 3.217e-5,
-            modes: 0,
-            local_modes: 0,
             shear_modulus: Some(kg / 0.4),
             shear_coefficient: Some(0.4),
             element_length: Some(0.08),
-            damping: RayleighConfig::Coefficients {
-                alpha: 0.0,
-                beta: 0.0,
-            },
+            ..rail_config()
         };
         Layer::new(&cfg, 32.0, Method::Fem, 0, &[0.1, 0.74], 0)
     }
