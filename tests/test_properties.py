@@ -52,6 +52,14 @@ def structures(draw, methods=("modal",)):
             inertance=draw(st.floats(1e-3, 50.0)), stiffness=draw(st.floats(1e2, 1e9)), damping=draw(st.floats(0.0, 1e4)),
             count=count, x0=draw(st.floats(0.0, spacing)), spacing=spacing, upper="l0", lower="l1",
         )
+    if method == "fem":
+        # Per-layer meshes (nodes on the coupling points) and Timoshenko layers.
+        for layer in layers:
+            if draw(st.booleans()):
+                layer.element_length = length / draw(st.integers(2, 40))
+            if draw(st.booleans()):
+                layer.shear_modulus = layer.youngs_modulus / draw(st.floats(2.0, 3.0))
+                layer.shear_coefficient = draw(st.floats(0.3, 1.0))
     if method == "hybrid":
         layers[0].local_modes = draw(st.integers(1, 20))
         cfg.discretisation.omega_r = draw(st.floats(2 * np.pi * 10.0, 2 * np.pi * 5000.0))
