@@ -164,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", help="directory for result.npz, metrics.json, config.toml and a plot")
     s.add_argument("--no-plot", action="store_true", help="do not write histories.png")
     s.set_defaults(func=cmd_simulate)
-    v = sub.add_parser("validate", help="the convergence study: the article's case on every discretisation against a refined reference, as a Markdown page (about an hour on two cores)")
+    v = sub.add_parser("validate", help="the convergence study: the article's case on every discretisation against a refined reference, as a Markdown page (about 15 minutes on two cores)")
     v.add_argument("--out", default="docs/validation.md", help="Markdown page to write (default: docs/validation.md)")
     v.add_argument("--workers", type=int, default=2, help="runs at a time (default: 2)")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
