@@ -162,7 +162,7 @@ def amplitudes(res: Result) -> dict:
         "rail_acc_lp": float(np.abs(_low_pass(ra, dt, RAIL_BAND_HZ)).max()),
         "slab_acc_lp": float(np.abs(_low_pass(sa, dt, SLAB_BAND_HZ)).max()),
         "bands": band_mean_squares(ra, dt).tolist(),
-        "contact_losses": len(res.contact_loss) if hasattr(res, "contact_loss") else 0,
+        "contact_losses": len(res.contact_loss),
     }
 
 
