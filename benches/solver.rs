@@ -8,26 +8,10 @@
 //! `converged_full_run` with `hybrid_full_run` of the same bench run.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::Path;
-use vtb::{Model, Profile, presets, simulate::Simulation};
+mod common;
 
-fn paper_profile() -> Profile {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/data");
-    let meta: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("paper_profile.json")).expect("fixture json"),
-    )
-    .expect("json");
-    let bytes = std::fs::read(dir.join("paper_profile.f64")).expect("fixture data");
-    let values = bytes
-        .chunks_exact(8)
-        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
-        .collect();
-    Profile {
-        x0: meta["x0"].as_f64().unwrap(),
-        dx: meta["dx"].as_f64().unwrap(),
-        values,
-    }
-}
+use common::paper_profile;
+use vtb::{Model, Profile, presets, simulate::Simulation};
 
 /// Unknowns, nonzeros of the stepping matrix A = 2M + ΔtC + Δt²K/2 and of its LDLᵀ factor,
 /// and the half-bandwidth of A in the mesh's natural (by position) numbering.

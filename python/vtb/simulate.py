@@ -111,11 +111,7 @@ class Result:
         )
 
 
-def simulate(config: Config) -> Result:
-    """Runs one configuration (Ctrl-C interrupts it)."""
-    _validate_python_side(config)
-    x0, dx, values = irregularity_profile(config)
-    out = _core.simulate(config.to_core_json(), x0, dx, values if values.size else None)
+def _result(out: dict, config: Config) -> Result:
     n = out["n_steps"]
     return Result(
         t=np.arange(n + 1) * out["dt"],
@@ -132,21 +128,45 @@ def simulate(config: Config) -> Result:
     )
 
 
+def simulate(config: Config) -> Result:
+    """Runs one configuration (Ctrl-C interrupts it)."""
+    _validate_python_side(config)
+    x0, dx, values = irregularity_profile(config)
+    out = _core.simulate(config.to_core_json(), x0, dx, values if values.size else None)
+    return _result(out, config)
+
+
+#: The widest lockstep group by default (measured: ``cargo bench --bench lockstep``).
+DEFAULT_LANES = _core.DEFAULT_LANES
+
+
 def simulate_batch(
     configs: Sequence[Config],
     threads: Optional[int] = None,
     progress: Union[bool, object] = False,
     on_error: str = "raise",
-) -> list[Union[dict, VtbError]]:
-    """Runs many configurations in parallel in Rust and returns each run's metrics dict.
+    histories: bool = False,
+    lanes: int = DEFAULT_LANES,
+) -> list:
+    """Runs many configurations in parallel in Rust and returns each run's metrics dict (or,
+    with ``histories=True``, its full :class:`Result`).
+
+    Configurations that differ only in their dampers' parameters (``tids.inertance``,
+    ``stiffness``, ``damping``) or in their irregularity share one assembled model and run in
+    lockstep groups of up to ``lanes`` jobs (1, 2, 4 or 8; 1 runs every job alone): a job's
+    result is bit for bit the one it gives alone, a failing job leaves its group running, and
+    without ``histories`` a job keeps only the series its metrics need.
 
     ``threads``: worker threads (default: all cores). ``progress``: ``True`` for a tqdm bar,
     or a callable ``f(done)``. ``on_error``: ``"raise"`` raises the first failure,
     ``"return"`` puts the exception object in its place and continues. Configurations that
-    share an irregularity specification share one generated profile.
+    share an irregularity specification share one generated profile. Ctrl-C interrupts the
+    batch within a fraction of a second.
     """
     if on_error not in ("raise", "return"):
         raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
+    if not isinstance(lanes, int) or isinstance(lanes, bool) or lanes not in (1, 2, 4, 8):
+        raise config_error("lanes", lanes, "must be 1, 2, 4 or 8")
     jsons, profile_index, profiles, keys = [], [], [], {}
     results: list = [None] * len(configs)
     order = []
@@ -178,7 +198,7 @@ def simulate_batch(
     elif callable(progress):
         callback = progress
     try:
-        out = _core.batch(jsons, profiles, profile_index, threads or 0, callback)
+        out = _core.batch(jsons, profiles, profile_index, threads or 0, callback, histories, lanes)
     finally:
         if bar is not None:
             bar.update(len(jsons) - bar.n)
@@ -186,7 +206,7 @@ def simulate_batch(
     for i, r in zip(order, out):
         if isinstance(r, BaseException) and on_error == "raise":
             raise r
-        results[i] = r
+        results[i] = _result(r, configs[i]) if histories and isinstance(r, dict) else r
     return results
 
 

@@ -1,148 +1,16 @@
 //! Block-tridiagonal systems. A finite-element structure numbered node by node (the DOFs of
 //! every layer at one node form a block) couples only neighbouring nodes, so its matrices are
 //! block tridiagonal. The time-stepping matrix is factorised by block LDLᵀ and the products
-//! with M and K are dense block rows. Blocks are padded to a multiple of four so that the
-//! kernels (one per block size, compiled for AVX2+FMA where the CPU has it) vectorise and
-//! keep a block's accumulators in registers; the few padding zeros cost less than the index
+//! with M and K are dense block rows. Blocks are padded to a multiple of four; the kernels work
+//! on W interleaved right-hand sides (the jobs of a lockstep group, W = 1 for a single run),
+//! every lane with the same operations, and vectorise across the block's rows and the lanes
+//! (compiled for AVX2 where the CPU has it); the few padding zeros cost less than the index
 //! arithmetic of a general sparse format.
 
 use crate::error::{Result, VtbError};
 use crate::sparse::CsrMatrix;
 
-/// Calls `$kernel::<C, L>(args)` for the runtime block size s = 4·C, with L the AVX2+FMA
-/// lanes where the CPU supports them and portable lanes otherwise.
-macro_rules! dispatch {
-    ($s:expr, $kernel:ident($($arg:expr),*)) => {{
-        #[cfg(target_arch = "x86_64")]
-        {
-            #[target_feature(enable = "avx2,fma")]
-            unsafe fn fast(f: impl FnOnce()) {
-                f()
-            }
-            if crate::simd::has_avx2() {
-                use crate::banded::lanes::Avx;
-                // SAFETY: the CPU supports AVX2 and FMA.
-                unsafe {
-                    match $s {
-                        4 => fast(|| $kernel::<1, Avx>($($arg),*)),
-                        8 => fast(|| $kernel::<2, Avx>($($arg),*)),
-                        12 => fast(|| $kernel::<3, Avx>($($arg),*)),
-                        _ => fast(|| $kernel::<4, Avx>($($arg),*)),
-                    }
-                }
-                return;
-            }
-        }
-        use crate::banded::lanes::Plain;
-        match $s {
-            4 => $kernel::<1, Plain>($($arg),*),
-            8 => $kernel::<2, Plain>($($arg),*),
-            12 => $kernel::<3, Plain>($($arg),*),
-            _ => $kernel::<4, Plain>($($arg),*),
-        }
-    }};
-}
-
-/// Four f64 lanes: explicit AVX registers with fused multiply–add (Rust never contracts
-/// a·b + c by itself, and the auto-vectoriser keeps `mul_add` chains scalar), or a portable
-/// array.
-mod lanes {
-    pub trait Lanes: Copy {
-        fn zero() -> Self;
-        fn splat(v: f64) -> Self;
-        fn load(p: &[f64]) -> Self;
-        fn store(self, p: &mut [f64]);
-        /// self + a·b.
-        fn madd(self, a: Self, b: Self) -> Self;
-        /// self − a·b.
-        fn msub(self, a: Self, b: Self) -> Self;
-        fn add(self, o: Self) -> Self;
-    }
-
-    #[derive(Clone, Copy)]
-    pub struct Plain([f64; 4]);
-
-    impl Lanes for Plain {
-        #[inline(always)]
-        fn zero() -> Self {
-            Plain([0.0; 4])
-        }
-        #[inline(always)]
-        fn splat(v: f64) -> Self {
-            Plain([v; 4])
-        }
-        #[inline(always)]
-        fn load(p: &[f64]) -> Self {
-            Plain(p[..4].try_into().unwrap())
-        }
-        #[inline(always)]
-        fn store(self, p: &mut [f64]) {
-            p[..4].copy_from_slice(&self.0);
-        }
-        #[inline(always)]
-        fn madd(self, a: Self, b: Self) -> Self {
-            Plain(std::array::from_fn(|i| self.0[i] + a.0[i] * b.0[i]))
-        }
-        #[inline(always)]
-        fn msub(self, a: Self, b: Self) -> Self {
-            Plain(std::array::from_fn(|i| self.0[i] - a.0[i] * b.0[i]))
-        }
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Plain(std::array::from_fn(|i| self.0[i] + o.0[i]))
-        }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    pub use avx::Avx;
-
-    #[cfg(target_arch = "x86_64")]
-    mod avx {
-        use std::arch::x86_64::*;
-
-        /// Only used inside the AVX2+FMA-compiled copies of the kernels (see `dispatch!`).
-        #[derive(Clone, Copy)]
-        pub struct Avx(__m256d);
-
-        // SAFETY (all methods): `Avx` kernels run only on CPUs with AVX2+FMA; loads and
-        // stores go through slices checked to hold four values.
-        impl super::Lanes for Avx {
-            #[inline(always)]
-            fn zero() -> Self {
-                unsafe { Avx(_mm256_setzero_pd()) }
-            }
-            #[inline(always)]
-            fn splat(v: f64) -> Self {
-                unsafe { Avx(_mm256_set1_pd(v)) }
-            }
-            #[inline(always)]
-            fn load(p: &[f64]) -> Self {
-                assert!(p.len() >= 4);
-                unsafe { Avx(_mm256_loadu_pd(p.as_ptr())) }
-            }
-            #[inline(always)]
-            fn store(self, p: &mut [f64]) {
-                assert!(p.len() >= 4);
-                unsafe { _mm256_storeu_pd(p.as_mut_ptr(), self.0) }
-            }
-            #[inline(always)]
-            fn madd(self, a: Self, b: Self) -> Self {
-                unsafe { Avx(_mm256_fmadd_pd(a.0, b.0, self.0)) }
-            }
-            #[inline(always)]
-            fn msub(self, a: Self, b: Self) -> Self {
-                unsafe { Avx(_mm256_fnmadd_pd(a.0, b.0, self.0)) }
-            }
-            #[inline(always)]
-            fn add(self, o: Self) -> Self {
-                unsafe { Avx(_mm256_add_pd(self.0, o.0)) }
-            }
-        }
-    }
-}
-use lanes::Lanes;
-
-/// Padded block sizes with compiled kernels.
+/// Padded block sizes (the lane kernels keep a block of up to 16 in fixed arrays).
 const SIZES: [usize; 4] = [4, 8, 12, 16];
 
 /// Internal index of a padding slot in `BlockLayout::perm`.
@@ -269,14 +137,41 @@ impl BlockPair {
         Self { s, vals }
     }
 
-    /// ya = A·x and yb = B·x.
-    pub fn mul2(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
-        let n = self.vals.len() / (6 * self.s);
-        assert!(
-            x.len() == n && ya.len() == n && yb.len() == n,
-            "block operator dimensions"
-        );
-        dispatch!(self.s, mul2_kernel(&self.vals, x, ya, yb));
+    /// ya = A·x and yb = B·x for `W` interleaved vectors (each lane with the operations of a
+    /// single vector).
+    pub fn mul2<const W: usize>(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
+        let s = self.s;
+        let nb = self.vals.len() / (6 * s * s);
+        assert!(x.len() == nb * s * W && ya.len() == x.len() && yb.len() == x.len());
+        crate::wide!(<W> (vals: &[f64] = &self.vals, s: usize = s, nb: usize = nb, x: &[f64] = x, ya: &mut [f64] = ya, yb: &mut [f64] = yb) {
+            for blk in 0..nb {
+                let lo = if blk == 0 { s } else { 0 };
+                let hi = if blk + 1 == nb { 2 * s } else { 3 * s };
+                let row = &vals[blk * 6 * s * s..(blk + 1) * 6 * s * s];
+                let (ya, yb) = (
+                    &mut ya[blk * s * W..(blk + 1) * s * W],
+                    &mut yb[blk * s * W..(blk + 1) * s * W],
+                );
+                // Two partial sums per product (even and odd columns) halve the latency chains.
+                let mut acc = [[[0.0; 16 * 8]; 2]; 2];
+                for k in lo..hi {
+                    let xk = &x[(blk * s + k - s) * W..(blk * s + k - s + 1) * W];
+                    let cols = &row[2 * k * s..(2 * k + 2) * s];
+                    let [aa, ab] = &mut acc[k & 1];
+                    for i in 0..s {
+                        let (a, b) = (cols[i], cols[s + i]);
+                        for c in 0..W {
+                            aa[i * W + c] = a.mul_add(xk[c], aa[i * W + c]);
+                            ab[i * W + c] = b.mul_add(xk[c], ab[i * W + c]);
+                        }
+                    }
+                }
+                for q in 0..s * W {
+                    ya[q] = acc[0][0][q] + acc[1][0][q];
+                    yb[q] = acc[0][1][q] + acc[1][1][q];
+                }
+            }
+        });
     }
 }
 
@@ -364,14 +259,69 @@ impl BlockLdlt {
         })
     }
 
-    /// Solves A·x = rhs in place; entries before block `first` of the right-hand side must be
-    /// zero (they are skipped in the forward pass).
-    pub fn solve_from(&self, x: &mut [f64], first: usize) {
-        assert_eq!(x.len(), self.nb * self.s, "block solve dimension");
-        dispatch!(
-            self.s,
-            solve_kernel(&self.l, &self.lt, &self.s_inv, x, first.min(self.nb))
-        );
+    /// Solves A·x = rhs in place for `W` interleaved right-hand sides (each lane with the
+    /// operations of a single one); entries before block `first` of the right-hand side must
+    /// be zero (they are skipped in the forward pass).
+    pub fn solve_from<const W: usize>(&self, x: &mut [f64], first: usize) {
+        let (s, nb) = (self.s, self.nb);
+        assert_eq!(x.len(), nb * s * W, "block solve dimension");
+        assert!(W <= 8, "at most 8 lanes");
+        let first = first.min(nb);
+        if nb == 0 {
+            return;
+        }
+        crate::wide!(<W> (l: &[f64] = &self.l, lt: &[f64] = &self.lt, s_inv: &[f64] = &self.s_inv, s: usize = s, nb: usize = nb, first: usize = first, x: &mut [f64] = x) {
+            let ss = s * s;
+            // Forward: z_b = x_b − L_b·z_{b−1} (kept in zp), x_b = S_b⁻¹·z_b.
+            let mut zp = [0.0; 16 * 8];
+            let mut w = [0.0; 16 * 8];
+            for b in first..nb {
+                let xb = &mut x[b * s * W..(b + 1) * s * W];
+                if b > first {
+                    // Two partial sums (even and odd k) halve the serial chain.
+                    let lb = &l[b * ss..(b + 1) * ss];
+                    let mut z2 = [0.0; 16 * 8];
+                    for k in 0..s {
+                        let acc = if k & 1 == 0 { &mut *xb } else { &mut z2[..s * W] };
+                        for i in 0..s {
+                            let l = lb[k * s + i];
+                            for c in 0..W {
+                                acc[i * W + c] = (-l).mul_add(zp[k * W + c], acc[i * W + c]);
+                            }
+                        }
+                    }
+                    for q in 0..s * W {
+                        xb[q] += z2[q];
+                    }
+                }
+                zp[..s * W].copy_from_slice(xb);
+                let sb = &s_inv[b * ss..(b + 1) * ss];
+                w[..s * W].fill(0.0);
+                for k in 0..s {
+                    for i in 0..s {
+                        let v = sb[k * s + i];
+                        for c in 0..W {
+                            w[i * W + c] = v.mul_add(zp[k * W + c], w[i * W + c]);
+                        }
+                    }
+                }
+                xb.copy_from_slice(&w[..s * W]);
+            }
+            // Backward: x_{b−1} −= L_bᵀ·x_b.
+            for b in (1..nb).rev() {
+                let lb = &lt[b * ss..(b + 1) * ss];
+                let (head, tail) = x.split_at_mut(b * s * W);
+                let (prev, xb) = (&mut head[(b - 1) * s * W..], &tail[..s * W]);
+                for k in 0..s {
+                    for m in 0..s {
+                        let l = lb[k * s + m];
+                        for c in 0..W {
+                            prev[m * W + c] = (-l).mul_add(xb[k * W + c], prev[m * W + c]);
+                        }
+                    }
+                }
+            }
+        });
     }
 
     pub fn block_size(&self) -> usize {
@@ -424,112 +374,6 @@ fn spd_inverse(a: &[f64], s: usize, out: &mut [f64]) -> std::result::Result<(), 
         }
     }
     Ok(())
-}
-
-/// x ← A⁻¹·x with blocks of size 4C (C lane groups).
-#[inline(always)]
-fn solve_kernel<const C: usize, L: Lanes>(
-    l: &[f64],
-    lt: &[f64],
-    s_inv: &[f64],
-    x: &mut [f64],
-    first: usize,
-) {
-    let s = 4 * C;
-    let ss = s * s;
-    let nb = x.len() / s;
-    if nb == 0 {
-        return;
-    }
-    let load = |v: &[f64]| -> [L; C] { std::array::from_fn(|c| L::load(&v[4 * c..])) };
-    // Forward: z_b = x_b − L_b·z_{b−1} (two accumulators halve the serial chain),
-    // x_b = S_b⁻¹·z_b.
-    let mut zp = [0.0; 16];
-    for b in first..nb {
-        let mut z = load(&x[b * s..]);
-        if b > first {
-            let lb = &l[b * ss..(b + 1) * ss];
-            let mut z2 = [L::zero(); C];
-            for k in (0..s).step_by(2) {
-                let (v0, v1) = (L::splat(zp[k]), L::splat(zp[k + 1]));
-                for c in 0..C {
-                    z[c] = z[c].msub(L::load(&lb[k * s + 4 * c..]), v0);
-                    z2[c] = z2[c].msub(L::load(&lb[(k + 1) * s + 4 * c..]), v1);
-                }
-            }
-            for c in 0..C {
-                z[c] = z[c].add(z2[c]);
-            }
-        }
-        for c in 0..C {
-            z[c].store(&mut zp[4 * c..]);
-        }
-        let sb = &s_inv[b * ss..(b + 1) * ss];
-        let mut w = [L::zero(); C];
-        for k in 0..s {
-            let v = L::splat(zp[k]);
-            for c in 0..C {
-                w[c] = w[c].madd(L::load(&sb[k * s + 4 * c..]), v);
-            }
-        }
-        for c in 0..C {
-            w[c].store(&mut x[b * s + 4 * c..]);
-        }
-    }
-    // Backward: x_{b−1} −= L_bᵀ·x_b, as axpys over the rows of L_b.
-    let mut xn = [0.0; 16];
-    xn[..s].copy_from_slice(&x[(nb - 1) * s..]);
-    for b in (1..nb).rev() {
-        let lb = &lt[b * ss..(b + 1) * ss];
-        let mut p = load(&x[(b - 1) * s..]);
-        let mut p2 = [L::zero(); C];
-        for k in (0..s).step_by(2) {
-            let (v0, v1) = (L::splat(xn[k]), L::splat(xn[k + 1]));
-            for c in 0..C {
-                p[c] = p[c].msub(L::load(&lb[k * s + 4 * c..]), v0);
-                p2[c] = p2[c].msub(L::load(&lb[(k + 1) * s + 4 * c..]), v1);
-            }
-        }
-        for c in 0..C {
-            p[c] = p[c].add(p2[c]);
-            p[c].store(&mut xn[4 * c..]);
-        }
-        x[(b - 1) * s..b * s].copy_from_slice(&xn[..s]);
-    }
-}
-
-/// ya = A·x, yb = B·x for an interleaved pair (`BlockPair`) with blocks of size 4C.
-#[inline(always)]
-fn mul2_kernel<const C: usize, L: Lanes>(ab: &[f64], x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
-    let s = 4 * C;
-    let nb = x.len() / s;
-    let w = 6 * s * s;
-    for blk in 0..nb {
-        // Columns of block row `blk` that exist: (blk−1)·s + k for k in lo..hi.
-        let lo = if blk == 0 { s } else { 0 };
-        let hi = if blk + 1 == nb { 2 * s } else { 3 * s };
-        let row = &ab[blk * w..(blk + 1) * w];
-        // Two accumulators per product (even and odd columns) halve the FMA latency chains.
-        let zero = [L::zero(); C];
-        let (mut sa, mut sb, mut ta, mut tb) = (zero, zero, zero, zero);
-        for k in (lo..hi).step_by(2) {
-            let (v0, v1) = (
-                L::splat(x[blk * s + k - s]),
-                L::splat(x[blk * s + k + 1 - s]),
-            );
-            let cols = &row[2 * k * s..(2 * k + 4) * s];
-            for c in 0..C {
-                sa[c] = sa[c].madd(L::load(&cols[4 * c..]), v0);
-                sb[c] = sb[c].madd(L::load(&cols[s + 4 * c..]), v0);
-                ta[c] = ta[c].madd(L::load(&cols[2 * s + 4 * c..]), v1);
-                tb[c] = tb[c].madd(L::load(&cols[3 * s + 4 * c..]), v1);
-            }
-        }
-        for c in 0..C {
-            sa[c].add(ta[c]).store(&mut ya[blk * s + 4 * c..]);
-            sb[c].add(tb[c]).store(&mut yb[blk * s + 4 * c..]);
-        }
-    }
 }
 
 #[cfg(test)]
@@ -591,7 +435,7 @@ mod tests {
             for i in 0..n {
                 x[lay.inv[i]] = rhs[i];
             }
-            f.solve_from(&mut x, 0);
+            f.solve_from::<1>(&mut x, 0);
             for i in 0..n {
                 assert!(
                     (x[lay.inv[i]] - want[i]).abs() < 1e-12,
@@ -607,7 +451,7 @@ mod tests {
             let twice = CsrMatrix::combine(&[(2.0, &a)]);
             let rows2 = BlockTri::new(&twice, &lay);
             let (mut y1, mut y2) = (vec![0.0; lay.len()], vec![0.0; lay.len()]);
-            BlockPair::new(&rows, &rows2).mul2(&x, &mut y1, &mut y2);
+            BlockPair::new(&rows, &rows2).mul2::<1>(&x, &mut y1, &mut y2);
             for i in 0..n {
                 let k = lay.inv[i];
                 assert!((y1[k] - rhs[i]).abs() < 1e-12 && (y2[k] - 2.0 * rhs[i]).abs() < 1e-12);
@@ -616,7 +460,7 @@ mod tests {
             let mut e = vec![0.0; lay.len()];
             let k0 = lay.inv[groups[5][1]];
             e[k0] = 1.0;
-            f.solve_from(&mut e, k0 / lay.s);
+            f.solve_from::<1>(&mut e, k0 / lay.s);
             let mut unit = vec![0.0; n];
             unit[groups[5][1]] = 1.0;
             let col = Ldlt::new(&a).unwrap().solve(&unit);

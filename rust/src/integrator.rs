@@ -111,12 +111,31 @@ impl SVec {
             x[i] += w * v;
         }
     }
+
+    /// selfᵀ·x for lane `lane` of W interleaved vectors.
+    #[inline]
+    pub fn dot_lane<const W: usize>(&self, x: &[f64], lane: usize) -> f64 {
+        self.idx
+            .iter()
+            .zip(&self.val)
+            .map(|(&i, &v)| v * x[i * W + lane])
+            .sum()
+    }
+
+    /// x += w·self in lane `lane` of W interleaved vectors.
+    #[inline]
+    pub fn add_to_lane<const W: usize>(&self, x: &mut [f64], lane: usize, w: f64) {
+        for (&i, &v) in self.idx.iter().zip(&self.val) {
+            x[i * W + lane] += w * v;
+        }
+    }
 }
 
 /// Up to GW contact ports of one subsystem (one car's wheels) and the data the engine derives
-/// from them each step.
+/// from them each step. Everything but `sfy` is shared by the W lanes of a batch: the ports
+/// sit where the wheels are, which all jobs of a batch share.
 #[derive(Clone, Debug)]
-pub struct PortBlock {
+pub struct PortBlock<const W: usize = 1> {
     /// The displacement vectors n_c (stepper coordinates): what the contact sees.
     pub vecs: [SVec; GW],
     /// The force vectors f_c where they differ from n_c (FE–SEA correction of the rail): same
@@ -128,16 +147,17 @@ pub struct PortBlock {
     /// First nonzero row in elimination order of `cols` and of `cols_f − cols`.
     start: usize,
     fstart: usize,
-    /// With dampers: n_c·y_a and (S⁻¹·Yᵀ·f_c)_a, per damper a.
+    /// With dampers: n_c·y_a and f_c·y_a per damper a, and (S⁻¹·Yᵀ·f_c)_a per damper and lane
+    /// (S depends on the lane's damper parameters).
     ny: Vec<[f64; GW]>,
-    sfy: Vec<[f64; GW]>,
     fy: Vec<[f64; GW]>,
+    sfy: Vec<[[f64; GW]; W]>,
     /// Scratch per damper: n_c·y_a and (f_c − n_c)·y_a of one port.
     yn: Vec<f64>,
     yd: Vec<f64>,
 }
 
-impl PortBlock {
+impl<const W: usize> PortBlock<W> {
     pub fn new(n: usize) -> Self {
         Self {
             vecs: Default::default(),
@@ -147,8 +167,8 @@ impl PortBlock {
             start: n,
             fstart: n,
             ny: Vec::new(),
-            sfy: Vec::new(),
             fy: Vec::new(),
+            sfy: Vec::new(),
             yn: Vec::new(),
             yd: Vec::new(),
         }
@@ -181,21 +201,21 @@ enum Engine {
 }
 
 impl Engine {
-    /// z ← A⁻¹·z for a right-hand side that is zero before unknown `start`.
-    fn solve_from(&self, z: &mut [f64], start: usize) {
+    /// z ← A⁻¹·z for W interleaved right-hand sides that are zero before unknown `start`.
+    fn solve_from<const W: usize>(&self, z: &mut [f64], start: usize) {
         match self {
             Engine::Sparse { factor, .. } => {
-                factor.forward::<1>(z, start);
-                factor.diag_backward(z);
+                factor.forward::<W>(z, start);
+                factor.diag_backward::<W>(z);
             }
-            Engine::Blocks { factor, .. } => factor.solve_from(z, start / factor.block_size()),
+            Engine::Blocks { factor, .. } => factor.solve_from::<W>(z, start / factor.block_size()),
         }
     }
 
-    fn mul2(&self, x: &[f64], ym: &mut [f64], yk: &mut [f64]) {
+    fn mul2<const W: usize>(&self, x: &[f64], ym: &mut [f64], yk: &mut [f64]) {
         match self {
-            Engine::Sparse { mk, .. } => mk.mul2(x, ym, yk),
-            Engine::Blocks { mk, .. } => mk.mul2(x, ym, yk),
+            Engine::Sparse { mk, .. } => mk.mul2::<W>(x, ym, yk),
+            Engine::Blocks { mk, .. } => mk.mul2::<W>(x, ym, yk),
         }
     }
 
@@ -221,6 +241,24 @@ pub struct Attachment {
     pub inertance: f64,
 }
 
+/// The parameters of one damper: what may differ between the lanes of a batch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DamperParams {
+    pub stiffness: f64,
+    pub damping: f64,
+    pub inertance: f64,
+}
+
+impl From<&Attachment> for DamperParams {
+    fn from(a: &Attachment) -> Self {
+        Self {
+            stiffness: a.stiffness,
+            damping: a.damping,
+            inertance: a.inertance,
+        }
+    }
+}
+
 /// Shape vectors of all dampers' upper (or lower) points stored densely on the union of
 /// their indices, so that a step gathers and scatters each stepper vector once and the
 /// per-damper work is contiguous dots and axpys (the modal rail shapes of all dampers share
@@ -230,11 +268,12 @@ struct ShapeSet {
     idx: Vec<usize>,
     /// Column a (length `idx.len()`) holds damper a's shape values.
     cols: Vec<f64>,
+    /// Gathered lanes, `[i·W + lane]`.
     buf: Vec<f64>,
 }
 
 impl ShapeSet {
-    fn new(shapes: &[SVec]) -> Self {
+    fn new(shapes: &[SVec], lanes: usize) -> Self {
         let mut idx: Vec<usize> = shapes.iter().flat_map(|v| v.idx.iter().copied()).collect();
         idx.sort_unstable();
         idx.dedup();
@@ -248,39 +287,42 @@ impl ShapeSet {
         Self {
             idx,
             cols,
-            buf: vec![0.0; len],
+            buf: vec![0.0; len * lanes],
         }
     }
 
-    fn col(&self, a: usize) -> &[f64] {
-        let len = self.idx.len();
-        &self.cols[a * len..(a + 1) * len]
+    /// out[a·W + lane] = shape_a·x (x: W interleaved lanes).
+    fn dots<const W: usize>(&mut self, x: &[f64], out: &mut [f64]) {
+        for (b, &i) in self.buf.chunks_exact_mut(W).zip(&self.idx) {
+            b.copy_from_slice(&x[i * W..i * W + W]);
+        }
+        crate::wide!(<W> (cols: &[f64] = &self.cols, len: usize = self.idx.len(), buf: &[f64] = &self.buf, out: &mut [f64] = out) {
+            for (a, o) in out.chunks_exact_mut(W).enumerate() {
+                o.copy_from_slice(&crate::simd::dot_lanes::<W>(&cols[a * len..(a + 1) * len], buf));
+            }
+        });
     }
 
-    /// out[a] = shape_a·x.
-    fn dots(&mut self, x: &[f64], out: &mut [f64]) {
-        for (b, &i) in self.buf.iter_mut().zip(&self.idx) {
-            *b = x[i];
-        }
-        for (a, o) in out.iter_mut().enumerate() {
-            *o = crate::simd::dot(self.col(a), &self.buf);
-        }
-    }
-
-    /// x += Σ_a w[a]·shape_a.
-    fn add_to(&mut self, x: &mut [f64], w: &[f64]) {
+    /// x += Σ_a w[a·W + lane]·shape_a.
+    fn add_to<const W: usize>(&mut self, x: &mut [f64], w: &[f64]) {
         let len = self.idx.len();
         self.buf.fill(0.0);
-        for (a, &wa) in w.iter().enumerate() {
-            crate::simd::axpy(&mut self.buf, &self.cols[a * len..(a + 1) * len], wa);
-        }
-        for (&b, &i) in self.buf.iter().zip(&self.idx) {
-            x[i] += b;
+        crate::wide!(<W> (buf: &mut [f64] = &mut self.buf, cols: &[f64] = &self.cols, len: usize = len, w: &[f64] = w) {
+            for (a, wa) in w.chunks_exact(W).enumerate() {
+                let wa: &[f64; W] = wa.try_into().expect("W weights");
+                crate::simd::axpy_lanes::<W>(buf, &cols[a * len..(a + 1) * len], wa);
+            }
+        });
+        for (b, &i) in self.buf.chunks_exact(W).zip(&self.idx) {
+            for c in 0..W {
+                x[i * W + c] += b[c];
+            }
         }
     }
 }
 
-/// The dampers of a stepper, in its numbering, with their Woodbury data.
+/// The dampers of a stepper, in its numbering, with their Woodbury data. Shapes, Y and
+/// WᵀY are shared by the lanes; the parameters (and so S⁻¹) are per lane, at `[a·W + lane]`.
 #[derive(Clone, Debug, Default)]
 struct Attached {
     upper: ShapeSet,
@@ -296,7 +338,9 @@ struct Attached {
     /// D⁻¹·L⁻¹·P·w_i.
     yt: Vec<f64>,
     lw: Vec<Vec<f64>>,
-    /// S⁻¹ (row-major, N_t × N_t).
+    /// WᵀA₀⁻¹W (row-major, N_t × N_t), and S⁻¹ = (K⁻¹ + WᵀA₀⁻¹W)⁻¹ of each lane at
+    /// `[lane·N_t² + r·N_t + c]`.
+    wty: Vec<f64>,
     s_inv: Vec<f64>,
     /// S⁻¹·Wᵀ·A₀⁻¹·b of the step's known right-hand side, and scratch: Wᵀ·z, the upper and
     /// lower shapes' products with z, per-damper weights.
@@ -315,20 +359,50 @@ impl Attached {
 
     /// wz = Wᵀ·x (W's columns: upper − lower shapes); also leaves the upper and lower
     /// products in pu, pl.
-    fn w_dots(&mut self, x: &[f64]) {
-        self.upper.dots(x, &mut self.pu);
-        self.lower.dots(x, &mut self.pl);
+    fn w_dots<const W: usize>(&mut self, x: &[f64]) {
+        self.upper.dots::<W>(x, &mut self.pu);
+        self.lower.dots::<W>(x, &mut self.pl);
         for ((w, u), l) in self.wz.iter_mut().zip(&self.pu).zip(&self.pl) {
             *w = u - l;
         }
     }
 
-    /// out = S⁻¹·v.
-    fn s_solve(&self, v: &[f64], out: &mut [f64]) {
+    /// out = S⁻¹·v per lane.
+    fn s_solve<const W: usize>(&self, v: &[f64], out: &mut [f64]) {
         let n = self.len();
-        for (r, o) in out.iter_mut().enumerate() {
-            *o = (0..n).map(|c| self.s_inv[r * n + c] * v[c]).sum();
+        for lane in 0..W {
+            let s = &self.s_inv[lane * n * n..(lane + 1) * n * n];
+            for r in 0..n {
+                out[r * W + lane] = (0..n).map(|c| s[r * n + c] * v[c * W + lane]).sum();
+            }
         }
+    }
+
+    /// Sets one lane's damper parameters and its S⁻¹.
+    fn set_params(
+        &mut self,
+        lane: usize,
+        lanes: usize,
+        dt: f64,
+        params: &[DamperParams],
+    ) -> Result<()> {
+        let nt = self.len();
+        let mut sm = self.wty.clone();
+        for (i, p) in params.iter().enumerate() {
+            let (ar, as_) = (
+                dt * p.damping + 0.5 * dt * dt * p.stiffness,
+                2.0 * p.inertance,
+            );
+            let q = i * lanes + lane;
+            self.alpha_r[q] = ar;
+            self.alpha_s[q] = as_;
+            self.k[q] = p.stiffness;
+            self.b[q] = p.inertance;
+            sm[i * nt + i] += 1.0 / (ar * as_ / (ar + as_));
+        }
+        let inv = invert_spd(&sm, nt)?;
+        self.s_inv[lane * nt * nt..(lane + 1) * nt * nt].copy_from_slice(&inv);
+        Ok(())
     }
 }
 
@@ -364,12 +438,17 @@ fn invert_spd(a: &[f64], n: usize) -> Result<Vec<f64>> {
     Ok(inv)
 }
 
-/// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F. Vectors, forces and
+/// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F for W jobs in lockstep
+/// (lanes). The lanes share the matrices, the factor of A, the dampers' positions and the
+/// ports; their states, forces and damper parameters are their own, stored interleaved
+/// (`[i·W + lane]`) so that each matrix entry is loaded once for all lanes. Every lane does
+/// the operations of a single run (W = 1 uses the single-vector kernels). Vectors, forces and
 /// observations live in the stepper's numbering (the elimination order of the factor of A,
 /// with padding slots for block factors).
 #[derive(Clone, Debug)]
-pub struct Newmark {
-    /// Length of stepper vectors: the factorised unknowns (`ns`), then the damper nodes.
+pub struct Newmark<const W: usize = 1> {
+    /// Length of one lane's stepper vectors: the factorised unknowns (`ns`), then the
+    /// damper nodes.
     pub n: usize,
     ns: usize,
     pub dt: f64,
@@ -378,8 +457,8 @@ pub struct Newmark {
     /// Stepper → original index (`PAD` for padding) and original → stepper index.
     perm: Vec<usize>,
     inv: Vec<usize>,
-    /// Displacements.
-    pub u: Vec<f64>,
+    /// Displacements (all lanes).
+    u: Vec<f64>,
     q: Vec<f64>,
     s: Vec<f64>,
     /// During a step the forward-substituted right-hand side (forward ports) or the free mean
@@ -398,7 +477,7 @@ pub struct Newmark {
     obs_a: Vec<f64>,
 }
 
-impl Newmark {
+impl<const W: usize> Newmark<W> {
     /// `ports` lists the unknowns contact forces act on (eliminated late so that port vectors
     /// forward-substitute cheaply); `port_len` is the number of entries of a port vector.
     /// Short port vectors (finite elements, car wheelsets) use *column ports*: the columns of
@@ -406,7 +485,8 @@ impl Newmark {
     /// axpys. Long ones (modal layers) are forward-substituted with the right-hand side.
     /// `blocks` optionally groups the unknowns by node: if the matrices are block tridiagonal
     /// in that grouping (finite elements), the block solver is used. `attachments` are dampers
-    /// whose nodes are the DOFs after those of m, c, k (which exclude the dampers).
+    /// whose nodes are the DOFs after those of m, c, k (which exclude the dampers); every lane
+    /// starts with their parameters (`set_damper_params` changes a lane's).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         m: &CsrMatrix,
@@ -418,6 +498,7 @@ impl Newmark {
         blocks: Option<&[Vec<usize>]>,
         attachments: &[Attachment],
     ) -> Result<Self> {
+        const { assert!(W >= 1 && W <= 8, "1 to 8 lanes") };
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
         let pattern = CsrMatrix::combine(&[(1.0, &a), (1.0, m), (1.0, k)]);
         let (engine, perm, inv) = match blocks.and_then(|g| BlockLayout::new(g, &pattern)) {
@@ -455,14 +536,14 @@ impl Newmark {
             att: Attached::default(),
             perm,
             inv,
-            u: vec![0.0; n],
-            q: vec![0.0; n],
-            s: vec![0.0; n],
-            z: vec![0.0; n],
+            u: vec![0.0; n * W],
+            q: vec![0.0; n * W],
+            s: vec![0.0; n * W],
+            z: vec![0.0; n * W],
             columns: column_ports.then(std::collections::HashMap::new),
             units: Vec::new(),
-            y1: vec![0.0; n],
-            y2: vec![0.0; n],
+            y1: vec![0.0; n * W],
+            y2: vec![0.0; n * W],
             obs: Vec::new(),
             obs_v: Vec::new(),
             obs_a: Vec::new(),
@@ -471,11 +552,11 @@ impl Newmark {
         Ok(nm)
     }
 
-    /// Woodbury data of the dampers: Y = A₀⁻¹W (and L⁻¹W for forward ports), S⁻¹.
+    /// Woodbury data of the dampers: Y = A₀⁻¹W (and L⁻¹W for forward ports), WᵀY, and every
+    /// lane's S⁻¹ for the attachments' own parameters.
     fn attach(&mut self, attachments: &[Attachment]) -> Result<()> {
-        let (dt, ns, nt) = (self.dt, self.ns, attachments.len());
+        let (ns, nt) = (self.ns, attachments.len());
         let mut att = Attached::default();
-        let mut kappa = Vec::with_capacity(nt);
         let (mut uppers, mut lowers) = (Vec::with_capacity(nt), Vec::with_capacity(nt));
         let mut y = Vec::with_capacity(nt);
         for (i, a) in attachments.iter().enumerate() {
@@ -484,30 +565,21 @@ impl Newmark {
             up.add_to(&mut e, 1.0);
             lo.add_to(&mut e, -1.0);
             if self.columns.is_some() {
-                self.engine.solve_from(&mut e, 0);
+                self.engine.solve_from::<1>(&mut e, 0);
             } else {
                 let f = self.engine.sparse();
                 f.forward::<1>(&mut e, 0);
                 att.lw
                     .push(e.iter().zip(f.d_inv()).map(|(v, d)| v * d).collect());
-                f.diag_backward(&mut e);
+                f.diag_backward::<1>(&mut e);
             }
             y.push(e);
             uppers.push(up);
             lowers.push(lo);
             att.node.push(ns + i);
-            let (ar, as_) = (
-                dt * a.damping + 0.5 * dt * dt * a.stiffness,
-                2.0 * a.inertance,
-            );
-            att.alpha_r.push(ar);
-            att.alpha_s.push(as_);
-            att.k.push(a.stiffness);
-            att.b.push(a.inertance);
-            kappa.push(ar * as_ / (ar + as_));
         }
-        att.upper = ShapeSet::new(&uppers);
-        att.lower = ShapeSet::new(&lowers);
+        att.upper = ShapeSet::new(&uppers, 1);
+        att.lower = ShapeSet::new(&lowers, 1);
         for v in [
             &mut att.t_free,
             &mut att.wz,
@@ -518,17 +590,44 @@ impl Newmark {
         ] {
             *v = vec![0.0; nt];
         }
-        let mut sm = vec![0.0; nt * nt];
+        att.wty = vec![0.0; nt * nt];
         for (j, yj) in y.iter().enumerate() {
-            att.w_dots(yj);
+            att.w_dots::<1>(yj);
             for i in 0..nt {
-                sm[i * nt + j] = att.wz[i] + if i == j { 1.0 / kappa[i] } else { 0.0 };
+                att.wty[i * nt + j] = att.wz[i];
             }
         }
-        att.s_inv = invert_spd(&sm, nt)?;
         att.yt = (0..ns * nt).map(|q| y[q % nt][q / nt]).collect();
+        // From here on the dampers work on W lanes.
+        att.upper = ShapeSet::new(&uppers, W);
+        att.lower = ShapeSet::new(&lowers, W);
+        for v in [
+            &mut att.t_free,
+            &mut att.wz,
+            &mut att.pu,
+            &mut att.pl,
+            &mut att.wu,
+            &mut att.wl,
+            &mut att.alpha_r,
+            &mut att.alpha_s,
+            &mut att.k,
+            &mut att.b,
+        ] {
+            *v = vec![0.0; nt * W];
+        }
+        att.s_inv = vec![0.0; nt * nt * W];
+        let params: Vec<DamperParams> = attachments.iter().map(DamperParams::from).collect();
+        for lane in 0..W {
+            att.set_params(lane, W, self.dt, &params)?;
+        }
         self.att = att;
         Ok(())
+    }
+
+    /// Gives lane `lane` its own damper parameters (one per attachment, in order).
+    pub fn set_damper_params(&mut self, lane: usize, params: &[DamperParams]) -> Result<()> {
+        assert_eq!(params.len(), self.att.len(), "one parameter set per damper");
+        self.att.set_params(lane, W, self.dt, params)
     }
 
     /// A shape vector (original numbering) in the stepper's numbering, into `out`.
@@ -551,61 +650,99 @@ impl Newmark {
         v
     }
 
-    /// A dense vector (original numbering) in the stepper's numbering.
+    /// A dense vector (original numbering) in the stepper's numbering, the same in every lane.
     pub fn to_stepper(&self, x: &[f64]) -> Vec<f64> {
         self.perm
             .iter()
-            .map(|&i| if i == PAD { 0.0 } else { x[i] })
+            .flat_map(|&i| [if i == PAD { 0.0 } else { x[i] }; W])
             .collect()
-    }
-
-    /// Current displacements in the original numbering.
-    pub fn displacements(&self) -> Vec<f64> {
-        let mut x = vec![0.0; self.inv.len()];
-        for (i, &k) in self.inv.iter().enumerate() {
-            x[i] = self.u[k];
-        }
-        x
     }
 
     /// Registers an observation vector (original numbering); returns its index.
     pub fn observe(&mut self, shape: &Shape) -> usize {
         let v = self.vector(shape);
         self.obs.push(v);
-        self.obs_v.push(0.0);
-        self.obs_a.push(0.0);
+        self.obs_v.extend([0.0; W]);
+        self.obs_a.extend([0.0; W]);
         self.obs.len() - 1
     }
 
-    /// Sets the state at t = 0 from displacements, velocities and accelerations (original
-    /// numbering). The acceleration only seeds the observed Newmark acceleration recursion,
-    /// which carries any error in a₀ forever, so it must satisfy the equation of motion.
-    pub fn set_state(&mut self, u0: &[f64], v0: &[f64], a0: &[f64], k: &CsrMatrix, m: &CsrMatrix) {
+    /// Sets lane `lane`'s state at t = 0 from displacements, velocities and accelerations
+    /// (original numbering) and that lane's K and M. The acceleration only seeds the observed
+    /// Newmark acceleration recursion, which carries any error in a₀ forever, so it must
+    /// satisfy the equation of motion.
+    #[allow(clippy::too_many_arguments)]
+    pub fn set_state(
+        &mut self,
+        lane: usize,
+        u0: &[f64],
+        v0: &[f64],
+        a0: &[f64],
+        k: &CsrMatrix,
+        m: &CsrMatrix,
+    ) {
         let n = self.inv.len();
         let (mut ku, mut mv) = (vec![0.0; n], vec![0.0; n]);
         k.mul(u0, &mut ku);
         m.mul(v0, &mut mv);
-        let q: Vec<f64> = (0..n).map(|i| 2.0 * mv[i] - self.dt * ku[i]).collect();
-        self.q = self.to_stepper(&q);
-        self.s = self.to_stepper(&ku);
-        self.u = self.to_stepper(u0);
-        let (vt, at) = (self.to_stepper(v0), self.to_stepper(a0));
+        let put = |dst: &mut [f64], x: &dyn Fn(usize) -> f64| {
+            for (slot, &i) in self.perm.iter().enumerate() {
+                dst[slot * W + lane] = if i == PAD { 0.0 } else { x(i) };
+            }
+        };
+        put(&mut self.q, &|i| 2.0 * mv[i] - self.dt * ku[i]);
+        put(&mut self.s, &|i| ku[i]);
+        put(&mut self.u, &|i| u0[i]);
         for (j, o) in self.obs.iter().enumerate() {
-            self.obs_v[j] = o.dot(&vt);
-            self.obs_a[j] = o.dot(&at);
+            let at = |x: &[f64]| -> f64 {
+                o.idx
+                    .iter()
+                    .zip(&o.val)
+                    .map(|(&k, v)| {
+                        let i = self.perm[k];
+                        if i == PAD { 0.0 } else { v * x[i] }
+                    })
+                    .sum()
+            };
+            self.obs_v[j * W + lane] = at(v0);
+            self.obs_a[j * W + lane] = at(a0);
         }
     }
 
-    /// Displacement, velocity and acceleration of observation `j`.
-    pub fn observed(&self, j: usize) -> (f64, f64, f64) {
-        (self.obs[j].dot(&self.u), self.obs_v[j], self.obs_a[j])
+    /// Zeroes a lane's state (a failed job: its lane then stays finite and idle).
+    pub fn clear_lane(&mut self, lane: usize) {
+        for v in [&mut self.u, &mut self.q, &mut self.s, &mut self.z] {
+            for x in v.iter_mut().skip(lane).step_by(W) {
+                *x = 0.0;
+            }
+        }
+        for v in [&mut self.obs_v, &mut self.obs_a] {
+            for x in v.iter_mut().skip(lane).step_by(W) {
+                *x = 0.0;
+            }
+        }
+    }
+
+    /// Whether a lane's displacements and observations are all finite.
+    pub fn lane_finite(&self, lane: usize) -> bool {
+        self.u.iter().skip(lane).step_by(W).all(|v| v.is_finite())
+            && (0..self.obs.len()).all(|j| self.observed(j, lane).2.is_finite())
+    }
+
+    /// Displacement, velocity and acceleration of observation `j` in lane `lane`.
+    pub fn observed(&self, j: usize, lane: usize) -> (f64, f64, f64) {
+        (
+            self.obs[j].dot_lane::<W>(&self.u, lane),
+            self.obs_v[j * W + lane],
+            self.obs_a[j * W + lane],
+        )
     }
 
     pub fn n_observed(&self) -> usize {
         self.obs.len()
     }
 
-    /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering).
+    /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering, all lanes).
     pub fn begin_step(&mut self, f_prev: &[f64], f_next: &[f64]) {
         // Columns are dropped between steps only: every port block of a step (one per car)
         // must find its columns until the step ends.
@@ -620,44 +757,50 @@ impl Newmark {
         }
         // Damper nodes: a_d·v̄_d = b_d + (α_r·N_upper + α_s·N_lower)ᵀv̄, eliminated.
         let att = &mut self.att;
-        if att.len() > 0 {
-            for i in 0..att.len() {
-                let g = self.z[att.node[i]] / (att.alpha_r[i] + att.alpha_s[i]);
-                att.wu[i] = att.alpha_r[i] * g;
-                att.wl[i] = att.alpha_s[i] * g;
+        let nt = att.len();
+        if nt > 0 {
+            for i in 0..nt {
+                for lane in 0..W {
+                    let q = i * W + lane;
+                    let g = self.z[att.node[i] * W + lane] / (att.alpha_r[q] + att.alpha_s[q]);
+                    att.wu[q] = att.alpha_r[q] * g;
+                    att.wl[q] = att.alpha_s[q] * g;
+                }
             }
-            att.upper.add_to(&mut self.z, &att.wu);
-            att.lower.add_to(&mut self.z, &att.wl);
+            att.upper.add_to::<W>(&mut self.z, &att.wu);
+            att.lower.add_to::<W>(&mut self.z, &att.wl);
         }
         let ns = self.ns;
         if self.columns.is_some() {
-            self.engine.solve_from(&mut self.z[..ns], 0);
+            self.engine.solve_from::<W>(&mut self.z[..ns * W], 0);
         } else {
-            self.engine.sparse().forward::<1>(&mut self.z[..ns], 0);
+            self.engine.sparse().forward::<W>(&mut self.z[..ns * W], 0);
         }
-        if self.att.len() > 0 {
+        if nt > 0 {
             if self.columns.is_some() {
-                self.att.w_dots(&self.z);
+                self.att.w_dots::<W>(&self.z);
             } else {
-                for (w, lw) in self.att.wz.iter_mut().zip(&self.att.lw) {
-                    *w = crate::simd::dot(lw, &self.z[..ns]);
-                }
+                crate::wide!(<W> (wz: &mut [f64] = &mut self.att.wz, lw: &[Vec<f64>] = &self.att.lw, z: &[f64] = &self.z[..ns * W]) {
+                    for (w, l) in wz.chunks_exact_mut(W).zip(lw) {
+                        w.copy_from_slice(&crate::simd::dot_lanes::<W>(l, z));
+                    }
+                });
             }
             let mut t = std::mem::take(&mut self.att.t_free);
-            self.att.s_solve(&self.att.wz, &mut t);
+            self.att.s_solve::<W>(&self.att.wz, &mut t);
             self.att.t_free = t;
         }
     }
 
-    /// n_c·y_a and S⁻¹·Yᵀ·f_c of a port block (dampers only).
-    fn prepare_damper_ports(&self, ports: &mut PortBlock) {
+    /// n_c·y_a, f_c·y_a and each lane's S⁻¹·Yᵀ·f_c of a port block (dampers only).
+    fn prepare_damper_ports(&self, ports: &mut PortBlock<W>) {
         let nt = self.att.len();
         if nt == 0 {
             return;
         }
         ports.ny.resize(nt, [0.0; GW]);
-        ports.sfy.resize(nt, [0.0; GW]);
         ports.fy.resize(nt, [0.0; GW]);
+        ports.sfy.resize(nt, [[0.0; GW]; W]);
         // Row-wise over the port entries: the inner loop runs over the dampers. Force and
         // displacement vectors differ at a few entries only (FE–SEA correction).
         let (mut yn, mut yd) = (std::mem::take(&mut ports.yn), std::mem::take(&mut ports.yd));
@@ -686,15 +829,19 @@ impl Newmark {
             }
         }
         (ports.yn, ports.yd) = (yn, yd);
-        for a in 0..nt {
-            let row = &self.att.s_inv[a * nt..(a + 1) * nt];
-            ports.sfy[a] = std::array::from_fn(|c| (0..nt).map(|b| row[b] * ports.fy[b][c]).sum());
+        for lane in 0..W {
+            let s = &self.att.s_inv[lane * nt * nt..(lane + 1) * nt * nt];
+            for a in 0..nt {
+                let row = &s[a * nt..(a + 1) * nt];
+                ports.sfy[a][lane] =
+                    std::array::from_fn(|c| (0..nt).map(|b| row[b] * ports.fy[b][c]).sum());
+            }
         }
     }
 
     /// Prepares the port vectors set this step: forward substitution, or the cached columns
-    /// of A⁻¹ they need.
-    pub fn prepare_ports(&mut self, ports: &mut PortBlock) {
+    /// of A⁻¹ they need. Shared by all lanes.
+    pub fn prepare_ports(&mut self, ports: &mut PortBlock<W>) {
         self.prepare_damper_ports(ports);
         if let Some(cache) = &mut self.columns {
             for v in ports.vecs.iter().chain(ports.force.iter().flatten()) {
@@ -702,7 +849,7 @@ impl Newmark {
                     cache.entry(k).or_insert_with(|| {
                         let mut e = vec![0.0; self.ns];
                         e[k] = 1.0;
-                        self.engine.solve_from(&mut e, k);
+                        self.engine.solve_from::<1>(&mut e, k);
                         Column::new(&e)
                     });
                 }
@@ -767,88 +914,114 @@ impl Newmark {
         }
     }
 
-    /// Port displacements at t_{n+1} without the unknown port forces: n_cᵀ(u_n + Δt·A⁻¹·b).
-    pub fn free_port_disp(&self, ports: &PortBlock) -> [f64; GW] {
+    /// Port displacements at t_{n+1} without the unknown port forces, per lane:
+    /// n_cᵀ(u_n + Δt·A⁻¹·b).
+    pub fn free_port_disp(&self, ports: &PortBlock<W>) -> [[f64; GW]; W] {
         // Dampers: −n_cᵀ·Y·S⁻¹·WᵀA₀⁻¹b.
-        let corr: [f64; GW] = std::array::from_fn(|c| {
-            (0..self.att.len())
-                .map(|a| ports.ny[a][c] * self.att.t_free[a])
-                .sum()
+        let corr: [[f64; GW]; W] = std::array::from_fn(|lane| {
+            std::array::from_fn(|c| {
+                (0..self.att.len())
+                    .map(|a| ports.ny[a][c] * self.att.t_free[a * W + lane])
+                    .sum()
+            })
         });
         if self.columns.is_some() {
-            return std::array::from_fn(|c| {
-                ports.vecs[c].dot(&self.u) + self.dt * (ports.vecs[c].dot(&self.z) - corr[c])
-            });
-        }
-        let d = self.engine.sparse().d_inv();
-        let mut acc = [0.0; GW];
-        for k in ports.start..self.ns {
-            let w = d[k] * self.z[k];
-            let r = &ports.cols[k * GW..k * GW + GW];
-            for c in 0..GW {
-                acc[c] += r[c] * w;
-            }
-        }
-        std::array::from_fn(|c| ports.vecs[c].dot(&self.u) + self.dt * (acc[c] - corr[c]))
-    }
-
-    /// Port compliance (Δt²/2)·n_iᵀA⁻¹f_j between two port blocks (rows: `a`, cols: `b`):
-    /// the displacement of port i per unit force of port j.
-    pub fn port_compliance(&self, a: &PortBlock, b: &PortBlock) -> [[f64; GW]; GW] {
-        let c2 = 0.5 * self.dt * self.dt;
-        // Dampers: −n_iᵀ·Y·S⁻¹·Yᵀ·f_j.
-        let corr = |i: usize, j: usize| -> f64 {
-            (0..self.att.len()).map(|t| a.ny[t][i] * b.sfy[t][j]).sum()
-        };
-        if let Some(cache) = &self.columns {
-            // n_iᵀA⁻¹f_j = Σ_l f_j[l]·(n_iᵀ·col_l).
-            return std::array::from_fn(|i| {
-                std::array::from_fn(|j| {
-                    let nj = b.force_vec(j);
-                    c2 * (nj
-                        .idx
-                        .iter()
-                        .zip(&nj.val)
-                        .map(|(l, v)| v * cache[l].dot(&a.vecs[i]))
-                        .sum::<f64>()
-                        - corr(i, j))
+            return std::array::from_fn(|lane| {
+                std::array::from_fn(|c| {
+                    let v = &ports.vecs[c];
+                    v.dot_lane::<W>(&self.u, lane)
+                        + self.dt * (v.dot_lane::<W>(&self.z, lane) - corr[lane][c])
                 })
             });
         }
         let d = self.engine.sparse().d_inv();
-        let mut g = [[0.0; GW]; GW];
-        for k in a.start.max(b.start)..self.ns {
-            let (ra, rb) = (&a.cols[k * GW..k * GW + GW], b.force_row(k));
-            for r in 0..GW {
-                let ar = ra[r] * d[k];
+        let mut acc = [[0.0; GW]; W];
+        for k in ports.start..self.ns {
+            let r = &ports.cols[k * GW..k * GW + GW];
+            for (lane, a) in acc.iter_mut().enumerate() {
+                let w = d[k] * self.z[k * W + lane];
                 for c in 0..GW {
-                    g[r][c] += ar * rb[c];
+                    a[c] += r[c] * w;
                 }
             }
         }
-        std::array::from_fn(|r| std::array::from_fn(|c| c2 * (g[r][c] - corr(r, c))))
+        std::array::from_fn(|lane| {
+            std::array::from_fn(|c| {
+                ports.vecs[c].dot_lane::<W>(&self.u, lane)
+                    + self.dt * (acc[lane][c] - corr[lane][c])
+            })
+        })
     }
 
-    /// Adds the port forces (Δt/2)·Σ_c w_c·f_c of the step.
-    pub fn add_port_forces(&mut self, ports: &PortBlock, w: [f64; GW]) {
+    /// Port compliance (Δt²/2)·n_iᵀA⁻¹f_j between two port blocks (rows: `a`, cols: `b`) per
+    /// lane: the displacement of port i per unit force of port j.
+    pub fn port_compliance(&self, a: &PortBlock<W>, b: &PortBlock<W>) -> [[[f64; GW]; GW]; W] {
+        let c2 = 0.5 * self.dt * self.dt;
+        // Without the dampers the compliance is the same in every lane.
+        let g: [[f64; GW]; GW] = if let Some(cache) = &self.columns {
+            // n_iᵀA⁻¹f_j = Σ_l f_j[l]·(n_iᵀ·col_l).
+            std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    let nj = b.force_vec(j);
+                    nj.idx
+                        .iter()
+                        .zip(&nj.val)
+                        .map(|(l, v)| v * cache[l].dot(&a.vecs[i]))
+                        .sum::<f64>()
+                })
+            })
+        } else {
+            let d = self.engine.sparse().d_inv();
+            let mut g = [[0.0; GW]; GW];
+            for k in a.start.max(b.start)..self.ns {
+                let (ra, rb) = (&a.cols[k * GW..k * GW + GW], b.force_row(k));
+                for r in 0..GW {
+                    let ar = ra[r] * d[k];
+                    for c in 0..GW {
+                        g[r][c] += ar * rb[c];
+                    }
+                }
+            }
+            g
+        };
+        // Dampers: −n_iᵀ·Y·S⁻¹·Yᵀ·f_j.
+        std::array::from_fn(|lane| {
+            std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    let corr: f64 = (0..self.att.len())
+                        .map(|t| a.ny[t][i] * b.sfy[t][lane][j])
+                        .sum();
+                    c2 * (g[i][j] - corr)
+                })
+            })
+        })
+    }
+
+    /// Adds the port forces (Δt/2)·Σ_c w_c·f_c of the step, per lane.
+    pub fn add_port_forces(&mut self, ports: &PortBlock<W>, w: &[[f64; GW]; W]) {
         let h = 0.5 * self.dt;
         if let Some(cache) = &self.columns {
-            for (c, wc) in w.into_iter().enumerate() {
+            for c in 0..GW {
                 let v = ports.force_vec(c);
                 for (l, val) in v.idx.iter().zip(&v.val) {
                     let col = &cache[l];
-                    crate::simd::axpy(&mut self.z[col.start..], &col.values, h * wc * val);
+                    let coef: [f64; W] = std::array::from_fn(|lane| h * w[lane][c] * val);
+                    crate::wide!(<W> (z: &mut [f64] = &mut self.z[col.start * W..], a: &[f64] = &col.values, v: &[f64; W] = &coef) {
+                        crate::simd::axpy_lanes::<W>(z, a, v)
+                    });
                 }
             }
             return;
         }
         for k in ports.start..self.ns {
             let r = ports.force_row(k);
-            let mut s = 0.0;
-            for c in 0..GW {
-                s += r[c] * w[c];
+            for (lane, wl) in w.iter().enumerate() {
+                let mut s = 0.0;
+                for c in 0..GW {
+                    s += r[c] * wl[c];
+                }
+                self.z[k * W + lane] += h * s;
             }
-            self.z[k] += h * s;
         }
     }
 
@@ -860,26 +1033,38 @@ impl Newmark {
             return;
         }
         let att = &mut self.att;
-        att.w_dots(&self.z);
+        att.w_dots::<W>(&self.z);
         let mut t = std::mem::take(&mut att.t_free);
-        att.s_solve(&att.wz, &mut t);
+        att.s_solve::<W>(&att.wz, &mut t);
         // z[..ns] −= Y·t, row by row over the contiguous rows of Y.
-        for (zk, row) in self.z[..ns].iter_mut().zip(att.yt.chunks_exact(nt)) {
-            *zk -= row.iter().zip(&t).map(|(y, ti)| y * ti).sum::<f64>();
-        }
+        crate::wide!(<W> (z: &mut [f64] = &mut self.z[..ns * W], yt: &[f64] = &att.yt, t: &[f64] = &t, nt: usize = nt) {
+            for (zk, row) in z.chunks_exact_mut(W).zip(yt.chunks_exact(nt)) {
+                    let mut s = [0.0; W];
+                    for (y, ti) in row.iter().zip(t.chunks_exact(W)) {
+                        for c in 0..W {
+                            s[c] = y.mul_add(ti[c], s[c]);
+                        }
+                    }
+                    for c in 0..W {
+                        zk[c] -= s[c];
+                    }
+                }
+        });
         att.t_free = t;
-        att.w_dots(&self.z);
+        att.w_dots::<W>(&self.z);
         for i in 0..nt {
-            let d = att.node[i];
-            let h = att.alpha_r[i] * att.pu[i] + att.alpha_s[i] * att.pl[i];
-            let zd = (self.z[d] + h) / (att.alpha_r[i] + att.alpha_s[i]);
-            self.z[d] = zd;
-            let vm = att.b[i] * (zd - att.pl[i]);
-            let vk = att.k[i] * (att.pu[i] - zd);
-            self.y1[d] = vm;
-            self.y2[d] = -vk;
-            att.wl[i] = -vm;
-            att.wu[i] = vk;
+            for lane in 0..W {
+                let (q, d) = (i * W + lane, att.node[i] * W + lane);
+                let h = att.alpha_r[q] * att.pu[q] + att.alpha_s[q] * att.pl[q];
+                let zd = (self.z[d] + h) / (att.alpha_r[q] + att.alpha_s[q]);
+                self.z[d] = zd;
+                let vm = att.b[q] * (zd - att.pl[q]);
+                let vk = att.k[q] * (att.pu[q] - zd);
+                self.y1[d] = vm;
+                self.y2[d] = -vk;
+                att.wl[q] = -vm;
+                att.wu[q] = vk;
+            }
         }
     }
 
@@ -888,8 +1073,8 @@ impl Newmark {
     fn damper_products(&mut self) {
         let att = &mut self.att;
         if att.len() > 0 {
-            att.lower.add_to(&mut self.y1, &att.wl);
-            att.upper.add_to(&mut self.y2, &att.wu);
+            att.lower.add_to::<W>(&mut self.y1, &att.wl);
+            att.upper.add_to::<W>(&mut self.y2, &att.wu);
         }
     }
 
@@ -897,11 +1082,16 @@ impl Newmark {
     pub fn end_step(&mut self) {
         let (dt, ns) = (self.dt, self.ns);
         if self.columns.is_none() {
-            self.engine.sparse().diag_backward(&mut self.z[..ns]);
+            self.engine
+                .sparse()
+                .diag_backward::<W>(&mut self.z[..ns * W]);
         }
         self.finish_dampers();
-        self.engine
-            .mul2(&self.z[..ns], &mut self.y1[..ns], &mut self.y2[..ns]);
+        self.engine.mul2::<W>(
+            &self.z[..ns * W],
+            &mut self.y1[..ns * W],
+            &mut self.y2[..ns * W],
+        );
         self.damper_products();
         let (u, q, sv, z, y1, y2) = (
             &mut self.u[..],
@@ -923,14 +1113,13 @@ impl Newmark {
             *qk = 4.0 * mk - dt * dt * kk - *qk - 2.0 * dt * *sk;
             *sk += dt * kk;
         }
-        for (o, (ov, oa)) in self
-            .obs
-            .iter()
-            .zip(self.obs_v.iter_mut().zip(self.obs_a.iter_mut()))
-        {
-            let nv = o.dot(&self.z);
-            *oa = 4.0 * (nv - *ov) / dt - *oa;
-            *ov = 2.0 * nv - *ov;
+        for (j, o) in self.obs.iter().enumerate() {
+            for lane in 0..W {
+                let nv = o.dot_lane::<W>(&self.z, lane);
+                let (ov, oa) = (&mut self.obs_v[j * W + lane], &mut self.obs_a[j * W + lane]);
+                *oa = 4.0 * (nv - *ov) / dt - *oa;
+                *ov = 2.0 * nv - *ov;
+            }
         }
     }
 }
@@ -961,12 +1150,12 @@ mod tests {
         ] {
             let dt = ratio;
             let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
-            let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[]).unwrap();
+            let mut nm: Newmark = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[]).unwrap();
             nm.observe(&Shape {
                 start: 0,
                 values: vec![1.0],
             });
-            nm.set_state(&[1.0], &[0.0], &[-w * w], &k, &m);
+            nm.set_state(0, &[1.0], &[0.0], &[-w * w], &k, &m);
             let wbar = 2.0 / dt * (w * dt / 2.0).atan();
             assert!((w / wbar - elong).abs() < 5e-6, "T̄/T = {}", w / wbar);
             let zero = [0.0];
@@ -974,7 +1163,7 @@ mod tests {
             for step in 1..=2000 {
                 nm.begin_step(&zero, &zero);
                 nm.end_step();
-                let (u, _, a) = nm.observed(0);
+                let (u, _, a) = nm.observed(0, 0);
                 let t = step as f64 * dt;
                 assert!(
                     (u - (wbar * t).cos()).abs() < 1e-9,
@@ -1056,7 +1245,7 @@ mod tests {
                 values: vec![1.0],
             });
             let u0 = [0.01, -0.02, 0.0, 0.03, 0.0, 0.0];
-            nm.set_state(&u0, &[0.0; 6], &[0.0; 6], &kf, &mf);
+            nm.set_state(0, &u0, &[0.0; 6], &[0.0; 6], &kf, &mf);
             let mut ports = PortBlock::new(nm.n);
             nm.vector_into(&port, &mut ports.vecs[0]);
             let f = vec![0.0; nm.n];
@@ -1064,20 +1253,21 @@ mod tests {
             for _ in 0..300 {
                 nm.begin_step(&f, &f);
                 nm.prepare_ports(&mut ports);
-                let free = nm.free_port_disp(&ports)[0];
-                let g = nm.port_compliance(&ports, &ports)[0][0];
+                let free = nm.free_port_disp(&ports)[0][0];
+                let g = nm.port_compliance(&ports, &ports)[0][0][0];
                 let p = -k_contact * free / (1.0 + k_contact * g);
-                nm.add_port_forces(&ports, [p, 0.0, 0.0, 0.0]);
+                nm.add_port_forces(&ports, &[[p, 0.0, 0.0, 0.0]]);
                 nm.end_step();
-                out.push(nm.observed(0).0);
+                out.push(nm.observed(0, 0).0);
                 out.push(p);
             }
             out
         };
         for port_len in [2, 100] {
-            let mut a =
+            let mut a: Newmark =
                 Newmark::new(&m0, &c0, &k0, 1e-2, &[0, 1], port_len, None, &[att.clone()]).unwrap();
-            let mut b = Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
+            let mut b: Newmark =
+                Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
             let (ra, rb) = (run(&mut a), run(&mut b));
             let scale = rb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (x, y) in ra.iter().zip(&rb) {

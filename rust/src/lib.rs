@@ -33,5 +33,5 @@ pub mod vehicle;
 pub use config::{Config, Profile};
 pub use error::{Result, VtbError};
 pub use model::Model;
-pub use results::RunResult;
-pub use simulate::{Job, run_batch, simulate};
+pub use results::{Record, RunResult};
+pub use simulate::{BatchOptions, Job, run_batch, simulate};

@@ -15,6 +15,15 @@ pub struct ContactLoss {
     pub t_end: Option<f64>,
 }
 
+/// What a run keeps: everything, or only the series its metrics are computed from (every
+/// layer at the first observation point, the first car body's bounce, the contact forces):
+/// the batch of a study never holds the full histories of all its jobs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Record {
+    Full,
+    Metrics,
+}
+
 /// Histories sampled at t = i·dt, i = 0..=n_steps, stored time-major.
 #[derive(Clone, Debug)]
 pub struct RunResult {
@@ -28,8 +37,11 @@ pub struct RunResult {
     pub disp: Vec<f64>,
     /// Acceleration (m/s²), same layout as `disp`.
     pub acc: Vec<f64>,
+    /// Cars and DOFs per car recorded (all and 10, or the first car's body bounce only).
     pub n_cars: usize,
-    /// Vehicle DOFs relative to the static state at t = 0 (m, rad) at `[(step·n_cars + car)·10 + dof]`.
+    pub vehicle_dofs: usize,
+    /// Vehicle DOFs relative to the static state at t = 0 (m, rad) at
+    /// `[(step·n_cars + car)·vehicle_dofs + dof]`.
     pub vehicle_disp: Vec<f64>,
     /// Vehicle accelerations (m/s², rad/s²), same layout.
     pub vehicle_acc: Vec<f64>,
@@ -44,22 +56,28 @@ impl RunResult {
         cfg: &Config,
         st: &Structure,
         n_steps: usize,
-        n_points: usize,
+        points: &[f64],
         n_cars: usize,
         n_wheels: usize,
+        record: Record,
     ) -> Self {
         let nl = st.layers.len();
         let len = n_steps + 1;
+        let (n_cars, vehicle_dofs) = match record {
+            Record::Full => (n_cars, N_DOF),
+            Record::Metrics => (n_cars.min(1), 1),
+        };
         Self {
             dt: cfg.solver.dt,
             n_steps,
             layer_names: st.layers.iter().map(|l| l.name.clone()).collect(),
-            points: cfg.observation_points(),
-            disp: vec![0.0; len * nl * n_points],
-            acc: vec![0.0; len * nl * n_points],
+            points: points.to_vec(),
+            disp: vec![0.0; len * nl * points.len()],
+            acc: vec![0.0; len * nl * points.len()],
             n_cars,
-            vehicle_disp: vec![0.0; len * n_cars * N_DOF],
-            vehicle_acc: vec![0.0; len * n_cars * N_DOF],
+            vehicle_dofs,
+            vehicle_disp: vec![0.0; len * n_cars * vehicle_dofs],
+            vehicle_acc: vec![0.0; len * n_cars * vehicle_dofs],
             n_wheels,
             contact_force: vec![0.0; len * n_wheels],
             contact_loss: Vec::new(),
@@ -82,11 +100,13 @@ impl RunResult {
     }
 
     pub fn vehicle_dof_disp(&self, car: usize, dof: usize) -> Vec<f64> {
-        Self::column(&self.vehicle_disp, self.n_cars * N_DOF, car * N_DOF + dof)
+        let d = self.vehicle_dofs;
+        Self::column(&self.vehicle_disp, self.n_cars * d, car * d + dof)
     }
 
     pub fn vehicle_dof_acc(&self, car: usize, dof: usize) -> Vec<f64> {
-        Self::column(&self.vehicle_acc, self.n_cars * N_DOF, car * N_DOF + dof)
+        let d = self.vehicle_dofs;
+        Self::column(&self.vehicle_acc, self.n_cars * d, car * d + dof)
     }
 
     pub fn wheel_force(&self, wheel: usize) -> Vec<f64> {

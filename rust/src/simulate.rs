@@ -1,13 +1,14 @@
-//! One coupled run (track + cars + contact), and many runs in parallel.
+//! Coupled runs (track + cars + contact): one at a time, or many jobs that share a model in
+//! lockstep (`Simulation` with W lanes, grouped automatically by `run_batch`).
 
 use crate::basis::Shape;
 use crate::config::{Config, InitialState, Profile};
 use crate::contact::{ContactSolver, compression};
 use crate::error::{Result, VtbError};
 use crate::fesea::FeSea;
-use crate::integrator::{GW, Newmark, PortBlock};
+use crate::integrator::{DamperParams, GW, Newmark, PortBlock};
 use crate::model::Model;
-use crate::results::{ContactLoss, RunResult};
+use crate::results::{ContactLoss, Record, RunResult};
 use crate::sparse::{Assembler, CsrMatrix, Ldlt};
 use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
 use rayon::prelude::*;
@@ -21,6 +22,15 @@ pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&AtomicBool>) ->
     Simulation::new(&model)?.run(cancel)
 }
 
+/// Steps between polls of the cancel flag (well under a second on every model).
+const CANCEL_POLL: usize = 64;
+/// Steps between checks that every state is finite.
+const FINITE_POLL: usize = 1024;
+/// The widest lockstep group the engine compiles.
+pub const MAX_LANES: usize = 8;
+/// The default widest group, chosen by measurement (`cargo bench --bench lockstep`, docs).
+pub const DEFAULT_LANES: usize = 4;
+
 /// One job of a batch: a configuration and its (possibly shared) irregularity profile.
 #[derive(Clone, Debug)]
 pub struct Job {
@@ -28,22 +38,173 @@ pub struct Job {
     pub profile: Arc<Profile>,
 }
 
-/// Runs the jobs in parallel on the current rayon pool and returns each job's metrics or its
-/// error, in input order. `done` counts finished jobs (for progress reporting).
+/// What a lane of a lockstep group owns: its irregularity and its dampers' parameters.
+#[derive(Clone, Debug)]
+pub struct LaneSpec<'a> {
+    pub profile: &'a Profile,
+    /// One per damper of the model (empty without dampers).
+    pub dampers: Vec<DamperParams>,
+}
+
+impl<'a> LaneSpec<'a> {
+    pub fn of(config: &Config, profile: &'a Profile) -> Self {
+        let dampers = config.tids.as_ref().map_or_else(Vec::new, |t| {
+            vec![
+                DamperParams {
+                    stiffness: t.stiffness,
+                    damping: t.damping,
+                    inertance: t.inertance,
+                };
+                t.count
+            ]
+        });
+        Self { profile, dampers }
+    }
+}
+
+/// Jobs that may share one model: configurations equal up to the dampers' parameters.
+fn model_key(cfg: &Config) -> String {
+    let mut c = cfg.clone();
+    if let Some(t) = &mut c.tids {
+        (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);
+    }
+    serde_json::to_string(&c).expect("a config serialises")
+}
+
+/// Lockstep widths for `n` jobs of one model on `threads` threads: powers of two up to
+/// `max_lanes`, as wide as possible while every thread gets a group.
+fn lane_widths(n: usize, threads: usize, max_lanes: usize) -> Vec<usize> {
+    let pow2_floor = |k: usize| 1usize << (usize::BITS - 1 - k.leading_zeros());
+    let w = pow2_floor(
+        n.div_ceil(threads.max(1))
+            .clamp(1, max_lanes.clamp(1, MAX_LANES)),
+    );
+    let mut sizes = vec![w; n / w];
+    let mut left = n % w;
+    while left > 0 {
+        let p = pow2_floor(left);
+        sizes.push(p);
+        left -= p;
+    }
+    sizes
+}
+
+/// How `run_batch` runs its jobs.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchOptions {
+    /// What each result keeps.
+    pub record: Record,
+    /// The widest lockstep group (1, 2, 4 or 8; 1 runs every job alone).
+    pub max_lanes: usize,
+}
+
+impl Default for BatchOptions {
+    fn default() -> Self {
+        Self {
+            record: Record::Metrics,
+            max_lanes: DEFAULT_LANES,
+        }
+    }
+}
+
+/// Runs the jobs on the current rayon pool and returns each job's result or error, in input
+/// order. Jobs whose configurations differ only in the dampers' parameters (the cases of a
+/// sweep, the designs of a generation) or in their irregularity share one assembled model and
+/// run in lockstep groups of up to `opts.max_lanes`; a job gives the same bits in a group as
+/// alone, and a job that fails leaves its group running. `done` counts finished jobs.
 pub fn run_batch(
     jobs: &[Job],
+    opts: BatchOptions,
     cancel: Option<&AtomicBool>,
     done: Option<&AtomicUsize>,
-) -> Vec<Result<BTreeMap<String, f64>>> {
-    jobs.par_iter()
-        .map(|job| {
-            let r = simulate(&job.config, &job.profile, cancel).map(|res| res.metrics());
-            if let Some(d) = done {
-                d.fetch_add(1, Ordering::Relaxed);
+) -> Vec<Result<RunResult>> {
+    let record = opts.record;
+    let mut out: Vec<Option<Result<RunResult>>> = (0..jobs.len()).map(|_| None).collect();
+    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, job) in jobs.iter().enumerate() {
+        if let Err(e) = job.config.validate(&job.profile) {
+            out[i] = Some(Err(e));
+            continue;
+        }
+        let g = *keys.entry(model_key(&job.config)).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
+    }
+    let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    let threads = rayon::current_num_threads();
+    let finished: Vec<(usize, Result<RunResult>)> = groups
+        .par_iter()
+        .flat_map_iter(|members| {
+            let first = &jobs[members[0]];
+            let model = if cancelled() {
+                Err(VtbError::Cancelled)
+            } else {
+                Model::build(first.config.clone(), (*first.profile).clone())
+            };
+            let mut chunks = Vec::new();
+            let mut at = 0;
+            for w in lane_widths(members.len(), threads, opts.max_lanes) {
+                chunks.push(&members[at..at + w]);
+                at += w;
             }
-            r
+            let results: Vec<(usize, Result<RunResult>)> = chunks
+                .into_par_iter()
+                .flat_map_iter(|chunk| {
+                    let res = match &model {
+                        Err(e) => vec![Err(e.clone()); chunk.len()],
+                        Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
+                        Ok(m) => run_lanes(m, jobs, chunk, record, cancel),
+                    };
+                    if let Some(d) = done {
+                        d.fetch_add(chunk.len(), Ordering::Relaxed);
+                    }
+                    chunk.iter().copied().zip(res).collect::<Vec<_>>()
+                })
+                .collect();
+            results
         })
+        .collect();
+    for (i, r) in finished {
+        out[i] = Some(r);
+    }
+    out.into_iter()
+        .map(|r| r.expect("every job has a result"))
         .collect()
+}
+
+/// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model.
+fn run_lanes(
+    model: &Model,
+    jobs: &[Job],
+    chunk: &[usize],
+    record: Record,
+    cancel: Option<&AtomicBool>,
+) -> Vec<Result<RunResult>> {
+    let lanes: Vec<LaneSpec> = chunk
+        .iter()
+        .map(|&i| LaneSpec::of(&jobs[i].config, &jobs[i].profile))
+        .collect();
+    fn go<const W: usize>(
+        model: &Model,
+        lanes: &[LaneSpec],
+        record: Record,
+        cancel: Option<&AtomicBool>,
+    ) -> Vec<Result<RunResult>> {
+        match Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)) {
+            Ok(r) => r,
+            Err(e) => vec![Err(e); W],
+        }
+    }
+    match lanes.len() {
+        1 => go::<1>(model, &lanes, record, cancel),
+        2 => go::<2>(model, &lanes, record, cancel),
+        4 => go::<4>(model, &lanes, record, cancel),
+        8 => go::<8>(model, &lanes, record, cancel),
+        w => unreachable!("lane width {w}"),
+    }
 }
 
 /// A constant force moving with the common speed.
@@ -54,21 +215,23 @@ struct Mover {
     magnitude: f64,
 }
 
-/// A car's own Newmark stepper; its contact ports are the wheelset DOFs.
-struct CarRun {
+/// A car's own Newmark stepper (one lane per job); its contact ports are the wheelset DOFs.
+struct CarRun<const W: usize> {
     car: Car,
-    nm: Newmark,
+    nm: Newmark<W>,
     m: CsrMatrix,
     k: CsrMatrix,
-    ports: PortBlock,
-    /// Wheelset compliance over one step for unit port forces (constant).
+    ports: PortBlock<W>,
+    /// Wheelset compliance over one step for unit port forces (constant, the same in every
+    /// lane).
     compliance: [[f64; GW]; GW],
     gravity: Vec<f64>,
     f_prev: Vec<f64>,
+    /// The static state of each lane (`[dof·W + lane]`).
     z0: Vec<f64>,
 }
 
-impl CarRun {
+impl<const W: usize> CarRun<W> {
     fn new(car: &Car, dt: f64, g: f64) -> Result<Self> {
         let dense = |m: &[[f64; N_DOF]; N_DOF]| {
             let mut a = Assembler::new(N_DOF);
@@ -84,7 +247,7 @@ impl CarRun {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[])?;
+        let mut nm = Newmark::<W>::new(&m, &c, &k, dt, &[], 1, None, &[])?;
         for i in 0..N_DOF {
             nm.observe(&Shape {
                 start: i,
@@ -99,7 +262,7 @@ impl CarRun {
             });
         }
         nm.prepare_ports(&mut ports);
-        let compliance = nm.port_compliance(&ports, &ports);
+        let compliance = nm.port_compliance(&ports, &ports)[0];
         let gravity = nm.to_stepper(&car.gravity(g));
         Ok(Self {
             car: car.clone(),
@@ -110,15 +273,21 @@ impl CarRun {
             compliance,
             f_prev: gravity.clone(),
             gravity,
-            z0: vec![0.0; N_DOF],
+            z0: vec![0.0; N_DOF * W],
         })
     }
 
     /// Gravity minus rails·P on the wheelsets (stepper coordinates) into `f_prev`.
-    fn set_force(&mut self, p: &[f64]) {
+    fn set_force(&mut self, p: &[[f64; GW]; W]) {
         self.f_prev.clone_from(&self.gravity);
-        for w in 0..N_WHEELS {
-            self.ports.vecs[w].add_to(&mut self.f_prev, -self.car.rails * p[w]);
+        for (lane, pl) in p.iter().enumerate() {
+            for w in 0..N_WHEELS {
+                self.ports.vecs[w].add_to_lane::<W>(
+                    &mut self.f_prev,
+                    lane,
+                    -self.car.rails * pl[w],
+                );
+            }
         }
     }
 }
@@ -134,9 +303,9 @@ struct RailCorrection<'m> {
     idx: [usize; 4],
     /// 1/Δt.
     rate: f64,
-    /// H_n, and H_{n+1} from the known loads of the step.
-    g_prev: [f64; 4],
-    g_next: [f64; 4],
+    /// H_n, and H_{n+1} from the known loads of the step, per lane.
+    g_prev: Vec<[f64; 4]>,
+    g_next: Vec<[f64; 4]>,
     /// b(x) at each wheel this step.
     wheel_r: Vec<[f64; 4]>,
     /// Static flexibility of the local modes (mode-acceleration recovery): 1/k_j, and
@@ -191,20 +360,33 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// The state of one coupled run.
-pub struct Simulation<'m> {
+/// A lane's own data: its irregularity, contact iteration, damper parameters, result, and
+/// its failure once it failed (the lane then idles at zero while the others go on).
+struct Lane<'a> {
+    profile: &'a Profile,
+    dampers: Vec<DamperParams>,
+    contact: ContactSolver,
+    error: Option<VtbError>,
+    loss_open: Vec<Option<f64>>,
+}
+
+/// The state of W coupled runs on one model in lockstep (W = 1: a single run).
+pub struct Simulation<'m, const W: usize = 1> {
     model: &'m Model,
-    track: Newmark,
+    lanes: Vec<Lane<'m>>,
+    record: Record,
+    /// Observation points recorded (all, or the first only).
+    points: Vec<f64>,
+    track: Newmark<W>,
     f_prev: Vec<f64>,
     f_next: Vec<f64>,
     movers: Vec<Mover>,
-    cars: Vec<CarRun>,
+    cars: Vec<CarRun<W>>,
     /// Rail shape vectors at the wheels, one block per car.
-    track_ports: Vec<PortBlock>,
+    track_ports: Vec<PortBlock<W>>,
     /// Add the rail elements' local flexibility under the wheels (finite-element rails).
     element_flexibility: bool,
-    contact: ContactSolver,
-    /// Contact force of each wheel on the modelled rail (N).
+    /// Contact force of each wheel on the modelled rail (N), `[lane·n_wheels + wheel]`.
     p: Vec<f64>,
     shape: Shape,
     scratch: crate::integrator::SVec,
@@ -212,11 +394,30 @@ pub struct Simulation<'m> {
     correction: Option<RailCorrection<'m>>,
 }
 
-impl<'m> Simulation<'m> {
+impl<'m> Simulation<'m, 1> {
+    /// A single run of the model's own configuration and irregularity, recording everything.
     pub fn new(model: &'m Model) -> Result<Self> {
+        let lane = LaneSpec::of(&model.cfg, &model.profile);
+        Self::lanes(model, &[lane], Record::Full)
+    }
+
+    /// Runs all steps; `cancel` is polled every `CANCEL_POLL` steps.
+    pub fn run(self, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+        self.run_lanes(cancel)?.pop().expect("one lane")
+    }
+}
+
+impl<'m, const W: usize> Simulation<'m, W> {
+    /// W jobs of one model: lane j runs on `lanes[j]`'s irregularity and damper parameters.
+    pub fn lanes(model: &'m Model, lanes: &[LaneSpec<'m>], record: Record) -> Result<Self> {
+        assert_eq!(lanes.len(), W, "one lane spec per lane");
         let cfg = &model.cfg;
         let st = &model.structure;
         let dt = cfg.solver.dt;
+        let points = match record {
+            Record::Full => cfg.observation_points(),
+            Record::Metrics => cfg.observation_points()[..1].to_vec(),
+        };
         let contact_dofs: Vec<usize> = if model.cars.is_empty() {
             vec![]
         } else {
@@ -225,7 +426,7 @@ impl<'m> Simulation<'m> {
                 .collect()
         };
         let (m, c, k) = st.stepping_matrices();
-        let mut track = Newmark::new(
+        let mut track = Newmark::<W>::new(
             m,
             c,
             k,
@@ -235,8 +436,31 @@ impl<'m> Simulation<'m> {
             st.node_blocks().as_deref(),
             &st.tids,
         )?;
+        for lane in lanes {
+            if lane.dampers.len() != st.tids.len() {
+                return Err(VtbError::config(
+                    "tids.count",
+                    lane.dampers.len(),
+                    format!(
+                        "a lockstep group needs {} dampers in every job",
+                        st.tids.len()
+                    ),
+                ));
+            }
+        }
+        // A lane whose dampers cannot be set up (e.g. parameters of extreme magnitude) fails
+        // alone.
+        let setup: Vec<Option<VtbError>> = lanes
+            .iter()
+            .enumerate()
+            .map(|(j, l)| {
+                (!l.dampers.is_empty())
+                    .then(|| track.set_damper_params(j, &l.dampers).err())
+                    .flatten()
+            })
+            .collect();
         for li in 0..st.layers.len() {
-            for x in cfg.observation_points() {
+            for &x in &points {
                 track.observe(&st.shape(li, x));
             }
         }
@@ -263,12 +487,22 @@ impl<'m> Simulation<'m> {
             .iter()
             .flat_map(|c| [c.car.hertz_g; N_WHEELS])
             .collect();
-        let contact = ContactSolver::new(
-            g,
-            vec![1.0; nw],
-            cfg.solver.contact_tol,
-            cfg.solver.contact_max_iter,
-        );
+        let lanes = lanes
+            .iter()
+            .zip(setup)
+            .map(|(l, error)| Lane {
+                profile: l.profile,
+                dampers: l.dampers.clone(),
+                contact: ContactSolver::new(
+                    g.clone(),
+                    vec![1.0; nw],
+                    cfg.solver.contact_tol,
+                    cfg.solver.contact_max_iter,
+                ),
+                error,
+                loss_open: vec![None; nw],
+            })
+            .collect();
         let n = track.n;
         let shape_len = st
             .layers
@@ -294,16 +528,13 @@ impl<'m> Simulation<'m> {
                 fs,
                 idx,
                 rate: 1.0 / dt,
-                g_prev: [0.0; 4],
-                g_next: [0.0; 4],
+                g_prev: vec![[0.0; 4]; W],
+                g_next: vec![[0.0; 4]; W],
                 wheel_r: vec![[0.0; 4]; nw],
                 inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
-                obs: cfg
-                    .observation_points()
-                    .into_iter()
-                    .filter(|_| cfg.discretisation.local_deflection)
-                    .collect::<Vec<_>>()
+                obs: points
                     .iter()
+                    .filter(|_| cfg.discretisation.local_deflection)
                     .map(|&x| {
                         let mut s = vec![0.0; fs.modes.len()];
                         fs.local_sines_into(x, &mut s);
@@ -317,7 +548,8 @@ impl<'m> Simulation<'m> {
                 movers: rail_movers,
             }
         });
-        let mut track_ports: Vec<PortBlock> = (0..cars.len()).map(|_| PortBlock::new(n)).collect();
+        let mut track_ports: Vec<PortBlock<W>> =
+            (0..cars.len()).map(|_| PortBlock::new(n)).collect();
         if correction.is_some() {
             for p in &mut track_ports {
                 p.force = Some(Default::default());
@@ -325,15 +557,17 @@ impl<'m> Simulation<'m> {
         }
         Ok(Self {
             model,
+            lanes,
+            record,
+            points,
             correction,
-            f_prev: vec![0.0; n],
-            f_next: vec![0.0; n],
+            f_prev: vec![0.0; n * W],
+            f_next: vec![0.0; n * W],
             movers,
             track_ports,
             element_flexibility: cfg.discretisation.element_flexibility,
             cars,
-            contact,
-            p: vec![0.0; nw],
+            p: vec![0.0; nw * W],
             shape: Shape {
                 start: 0,
                 values: vec![0.0; shape_len],
@@ -344,28 +578,33 @@ impl<'m> Simulation<'m> {
         })
     }
 
-    /// F_{n+1} += w·N_layer(x) (stepper coordinates), with the FE–SEA terms of a rail load.
+    /// F_{n+1} += w·N_layer(x) in every lane (stepper coordinates), with the FE–SEA terms of
+    /// a rail load.
     fn add_load(&mut self, layer: usize, x: f64, w: f64) {
         self.model.structure.shape_into(layer, x, &mut self.shape);
         self.track.vector_into(&self.shape, &mut self.scratch);
-        self.scratch.add_to(&mut self.f_next, w);
+        for lane in 0..W {
+            self.scratch.add_to_lane::<W>(&mut self.f_next, lane, w);
+        }
         if let Some(rc) = self.correction.as_mut().filter(|_| layer == 0) {
             let (f, r) = rc.unit_load(x);
-            for g in 0..4 {
-                self.f_next[rc.idx[g]] += w * f[g];
-                rc.g_next[g] += w * r[g];
+            for lane in 0..W {
+                for g in 0..4 {
+                    self.f_next[rc.idx[g] * W + lane] += w * f[g];
+                    rc.g_next[lane][g] += w * r[g];
+                }
             }
         }
     }
 
-    /// Static (or rest) initial state of track and cars.
+    /// Static (or rest) initial state of track and cars in every lane.
     fn initial_state(&mut self) -> Result<()> {
         let model = self.model;
         let cfg = &model.cfg;
         let st = &model.structure;
         let g = cfg.solver.gravity;
         // Wheel loads from the statics of each (statically determinate) car, per modelled rail.
-        let mut loads = Vec::with_capacity(self.p.len());
+        let mut loads = Vec::with_capacity(self.p.len() / W);
         for c in &self.cars {
             let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
             loads.extend(r.iter().map(|ri| ri / c.car.rails));
@@ -377,8 +616,11 @@ impl<'m> Simulation<'m> {
                 format!("wheelset {} carries no static load", i % N_WHEELS + 1),
             ));
         }
-        self.contact.p_ref.clone_from(&loads);
-        self.p.clone_from(&loads);
+        let nw = loads.len();
+        for (j, lane) in self.lanes.iter_mut().enumerate() {
+            lane.contact.p_ref.clone_from(&loads);
+            self.p[j * nw..(j + 1) * nw].copy_from_slice(&loads);
+        }
         // Track load at t = 0 in the original numbering.
         let n = st.n_dofs;
         let mut f0 = vec![0.0; n];
@@ -408,28 +650,82 @@ impl<'m> Simulation<'m> {
             }
         }
         if let Some(rc) = self.correction.as_mut() {
-            rc.g_prev = g0;
-        }
-        self.f_prev = self.track.to_stepper(&f0);
-        let u0 = match cfg.solver.initial_state {
-            InitialState::Static => Ldlt::new(&st.k)
-                .map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?
-                .solve(&f0),
-            InitialState::Rest => vec![0.0; n],
-        };
-        let a0 = accelerations(&st.m, &st.k, &u0, &f0)?;
-        self.track.set_state(&u0, &vec![0.0; n], &a0, &st.k, &st.m);
-        if let Some(rc) = self.correction.as_mut() {
+            rc.g_prev = vec![g0; W];
             rc.set_rows(self.cars.iter().flat_map(|c| c.car.wheel_x0), 0.0, 0.0);
         }
+        self.f_prev = self.track.to_stepper(&f0);
+        // Each lane's state from its own matrices (its dampers' parameters), as in a single
+        // run; lanes with the model's own parameters share them.
+        let own: Vec<DamperParams> = st.tids.iter().map(DamperParams::from).collect();
+        let mut own_state: Option<(Vec<f64>, Vec<f64>)> = None;
+        for j in 0..W {
+            if self.lanes[j].error.is_some() {
+                continue;
+            }
+            if let Err(e) = self.lane_initial_state(j, &f0, &loads, &own, &mut own_state) {
+                self.fail(j, e);
+            }
+        }
+        for (ci, c) in self.cars.iter_mut().enumerate() {
+            let p: [f64; GW] = std::array::from_fn(|w| {
+                if w < N_WHEELS {
+                    loads[ci * N_WHEELS + w]
+                } else {
+                    0.0
+                }
+            });
+            c.set_force(&[p; W]);
+        }
+        Ok(())
+    }
+
+    /// Lane `j`'s state at t = 0 from its own matrices (its dampers' parameters), as in a
+    /// single run; lanes with the model's own parameters share one solve (`own_state`).
+    fn lane_initial_state(
+        &mut self,
+        j: usize,
+        f0: &[f64],
+        loads: &[f64],
+        own: &[DamperParams],
+        own_state: &mut Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Result<()> {
+        let model = self.model;
+        let cfg = &model.cfg;
+        let st = &model.structure;
+        let g = cfg.solver.gravity;
+        let n = st.n_dofs;
+        let lane_mk;
+        let (m_l, k_l) = if self.lanes[j].dampers == own {
+            (&st.m, &st.k)
+        } else {
+            lane_mk = st.with_damper_params(&self.lanes[j].dampers);
+            (&lane_mk.0, &lane_mk.1)
+        };
+        let state = match (&*own_state, self.lanes[j].dampers == own) {
+            (Some(s), true) => s.clone(),
+            _ => {
+                let u0 = match cfg.solver.initial_state {
+                    InitialState::Static => Ldlt::new(k_l)
+                        .map_err(|e| VtbError::Solver(format!("static stiffness: {e}")))?
+                        .solve(f0),
+                    InitialState::Rest => vec![0.0; n],
+                };
+                let a0 = accelerations(m_l, k_l, &u0, f0)?;
+                if self.lanes[j].dampers == own {
+                    *own_state = Some((u0.clone(), a0.clone()));
+                }
+                (u0, a0)
+            }
+        };
+        let (u0, a0) = state;
+        self.track.set_state(j, &u0, &vec![0.0; n], &a0, k_l, m_l);
+        let profile = self.lanes[j].profile;
         for (ci, c) in self.cars.iter_mut().enumerate() {
             let mut zw = [0.0; N_WHEELS];
             for w in 0..N_WHEELS {
                 let x = c.car.wheel_x0[w];
                 let p0 = loads[ci * N_WHEELS + w];
-                zw[w] = st.displacement(0, x, &u0)
-                    + model.profile.at(x)
-                    + compression(c.car.hertz_g, p0);
+                zw[w] = st.displacement(0, x, &u0) + profile.at(x) + compression(c.car.hertz_g, p0);
             }
             let (_, z) = c.car.static_state(g, &zw);
             let mut f = c.car.gravity(g);
@@ -437,43 +733,82 @@ impl<'m> Simulation<'m> {
                 f[WHEEL0 + w] -= c.car.rails * loads[ci * N_WHEELS + w];
             }
             let av = accelerations(&c.m, &c.k, &z, &f)?;
-            c.nm.set_state(&z, &[0.0; N_DOF], &av, &c.k, &c.m);
-            c.z0 = z.to_vec();
-            c.set_force(&loads[ci * N_WHEELS..(ci + 1) * N_WHEELS]);
+            c.nm.set_state(j, &z, &[0.0; N_DOF], &av, &c.k, &c.m);
+            for i in 0..N_DOF {
+                c.z0[i * W + j] = z[i];
+            }
         }
         Ok(())
     }
 
-    /// Runs all steps; `cancel` is polled every 1024 steps.
-    pub fn run(mut self, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+    /// The wheel forces of car `ci` per lane, padded to the port width.
+    fn car_forces(&self, ci: usize) -> [[f64; GW]; W] {
+        let nw = self.p.len() / W;
+        std::array::from_fn(|lane| {
+            std::array::from_fn(|w| {
+                if w < N_WHEELS {
+                    self.p[lane * nw + ci * N_WHEELS + w]
+                } else {
+                    0.0
+                }
+            })
+        })
+    }
+
+    /// Lane `j` failed: keep the error, zero its state so that it idles finite.
+    fn fail(&mut self, j: usize, e: VtbError) {
+        let nw = self.p.len() / W;
+        self.lanes[j].error = Some(e);
+        self.track.clear_lane(j);
+        for c in &mut self.cars {
+            c.nm.clear_lane(j);
+        }
+        self.p[j * nw..(j + 1) * nw].fill(0.0);
+        for x in self.f_prev.iter_mut().skip(j).step_by(W) {
+            *x = 0.0;
+        }
+        if let Some(rc) = self.correction.as_mut() {
+            rc.g_prev[j] = [0.0; 4];
+        }
+    }
+
+    /// Runs all steps of every lane. The outer error is shared by all lanes (setup, or
+    /// cancellation: `cancel` is polled every `CANCEL_POLL` steps); the inner ones are each
+    /// lane's own.
+    pub fn run_lanes(mut self, cancel: Option<&AtomicBool>) -> Result<Vec<Result<RunResult>>> {
         self.initial_state()?;
         let model = self.model;
         let cfg = &model.cfg;
         let st = &model.structure;
-        let n_points = cfg.observation_points().len();
-        let nw = self.p.len();
+        let nw = self.p.len() / W;
         let ncars = self.cars.len();
-        let mut res = RunResult::new(cfg, st, self.n_steps, n_points, ncars, nw);
-        self.record(&mut res, 0);
+        let mut res: Vec<RunResult> = (0..W)
+            .map(|_| RunResult::new(cfg, st, self.n_steps, &self.points, ncars, nw, self.record))
+            .collect();
+        self.record_step(&mut res, 0);
         let dt = cfg.solver.dt;
         let v = cfg.speed;
-        let mut amat = vec![0.0; nw * nw];
-        let mut delta_free = vec![0.0; nw];
-        let mut loss_open: Vec<Option<f64>> = vec![None; nw];
+        let mut amat = vec![0.0; W * nw * nw];
+        let mut delta_free = vec![0.0; W * nw];
 
         for step in 0..self.n_steps {
-            if step % 1024 == 0 {
-                if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                    return Err(VtbError::Cancelled);
-                }
-                self.check_finite(step)?;
+            if step % CANCEL_POLL == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return Err(VtbError::Cancelled);
+            }
+            if step % FINITE_POLL == 0 {
+                self.check_finite(step);
+            }
+            if self.lanes.iter().all(|l| l.error.is_some()) {
+                break;
             }
             let t1 = (step + 1) as f64 * dt;
             self.f_next.fill(0.0);
             if let Some(rc) = self.correction.as_mut() {
-                rc.g_next = [0.0; 4];
-                for g in 0..4 {
-                    self.f_next[rc.idx[g]] -= rc.rate * rc.g_prev[g];
+                for lane in 0..W {
+                    rc.g_next[lane] = [0.0; 4];
+                    for g in 0..4 {
+                        self.f_next[rc.idx[g] * W + lane] -= rc.rate * rc.g_prev[lane][g];
+                    }
                 }
             }
             for mi in 0..self.movers.len() {
@@ -512,23 +847,28 @@ impl<'m> Simulation<'m> {
                 let c = &self.cars[ci];
                 let rail = self.track.free_port_disp(&self.track_ports[ci]);
                 let wheel = c.nm.free_port_disp(&c.ports);
-                for w in 0..N_WHEELS {
-                    let wi = ci * N_WHEELS + w;
-                    let x = c.car.wheel_x0[w] + v * t1;
-                    delta_free[wi] = wheel[w] - rail[w] - model.profile.at(x);
+                for (lane, l) in self.lanes.iter().enumerate() {
+                    for w in 0..N_WHEELS {
+                        let x = c.car.wheel_x0[w] + v * t1;
+                        delta_free[lane * nw + ci * N_WHEELS + w] =
+                            wheel[lane][w] - rail[lane][w] - l.profile.at(x);
+                    }
                 }
                 for cj in 0..ncars {
                     let g = self
                         .track
                         .port_compliance(&self.track_ports[ci], &self.track_ports[cj]);
-                    for r in 0..N_WHEELS {
-                        for s in 0..N_WHEELS {
-                            let own = if ci == cj {
-                                c.car.rails * c.compliance[r][s]
-                            } else {
-                                0.0
-                            };
-                            amat[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = g[r][s] + own;
+                    for (lane, gl) in g.iter().enumerate() {
+                        let a = &mut amat[lane * nw * nw..(lane + 1) * nw * nw];
+                        for r in 0..N_WHEELS {
+                            for s in 0..N_WHEELS {
+                                let own = if ci == cj {
+                                    c.car.rails * c.compliance[r][s]
+                                } else {
+                                    0.0
+                                };
+                                a[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = gl[r][s] + own;
+                            }
                         }
                     }
                 }
@@ -539,115 +879,159 @@ impl<'m> Simulation<'m> {
                     // excitation from it). Wheels are more than an element apart.
                     for w in 0..N_WHEELS {
                         let wi = ci * N_WHEELS + w;
-                        amat[wi * nw + wi] += st.local_flexibility(0, c.car.wheel_x0[w] + v * t1);
+                        let f = st.local_flexibility(0, c.car.wheel_x0[w] + v * t1);
+                        for lane in 0..W {
+                            amat[lane * nw * nw + wi * nw + wi] += f;
+                        }
                     }
                 }
             }
             if nw > 0 {
-                self.contact
-                    .solve(&mut self.p, &delta_free, &amat, t1, step + 1)?;
-            }
-            for (ci, c) in self.cars.iter_mut().enumerate() {
-                let p: [f64; GW] = std::array::from_fn(|w| {
-                    if w < N_WHEELS {
-                        self.p[ci * N_WHEELS + w]
-                    } else {
-                        0.0
+                for j in 0..W {
+                    let lane = &mut self.lanes[j];
+                    if lane.error.is_some() {
+                        continue;
                     }
-                });
-                self.track.add_port_forces(&self.track_ports[ci], p);
-                c.nm.add_port_forces(&c.ports, p.map(|pw| -c.car.rails * pw));
+                    let solved = lane.contact.solve(
+                        &mut self.p[j * nw..(j + 1) * nw],
+                        &delta_free[j * nw..(j + 1) * nw],
+                        &amat[j * nw * nw..(j + 1) * nw * nw],
+                        t1,
+                        step + 1,
+                    );
+                    if let Err(e) = solved {
+                        self.fail(j, e);
+                    }
+                }
+            }
+            for ci in 0..ncars {
+                let p = self.car_forces(ci);
+                let c = &mut self.cars[ci];
+                self.track.add_port_forces(&self.track_ports[ci], &p);
+                let wheel: [[f64; GW]; W] = p.map(|pl| pl.map(|pw| -c.car.rails * pw));
+                c.nm.add_port_forces(&c.ports, &wheel);
                 c.nm.end_step();
-                c.set_force(&p[..N_WHEELS]);
+                c.set_force(&p);
             }
             self.track.end_step();
             // F_{n+1} becomes F_n: moving forces plus the converged wheel forces.
             std::mem::swap(&mut self.f_prev, &mut self.f_next);
             for (ci, ports) in self.track_ports.iter().enumerate() {
-                for w in 0..N_WHEELS {
-                    ports
-                        .force_vec(w)
-                        .add_to(&mut self.f_prev, self.p[ci * N_WHEELS + w]);
+                for lane in 0..W {
+                    for w in 0..N_WHEELS {
+                        ports.force_vec(w).add_to_lane::<W>(
+                            &mut self.f_prev,
+                            lane,
+                            self.p[lane * nw + ci * N_WHEELS + w],
+                        );
+                    }
                 }
             }
             if let Some(rc) = self.correction.as_mut() {
-                rc.g_prev = rc.g_next;
-                for (wi, r) in rc.wheel_r.iter().enumerate() {
-                    for g in 0..4 {
-                        rc.g_prev[g] += self.p[wi] * r[g];
+                for lane in 0..W {
+                    rc.g_prev[lane] = rc.g_next[lane];
+                    for (wi, r) in rc.wheel_r.iter().enumerate() {
+                        for g in 0..4 {
+                            rc.g_prev[lane][g] += self.p[lane * nw + wi] * r[g];
+                        }
                     }
                 }
             }
-            for wi in 0..nw {
-                match (self.p[wi] == 0.0, loss_open[wi]) {
-                    (true, None) => loss_open[wi] = Some(t1),
-                    (false, Some(t0)) => {
-                        res.contact_loss.push(ContactLoss {
+            for (j, lane) in self.lanes.iter_mut().enumerate() {
+                if lane.error.is_some() {
+                    continue;
+                }
+                for wi in 0..nw {
+                    match (self.p[j * nw + wi] == 0.0, lane.loss_open[wi]) {
+                        (true, None) => lane.loss_open[wi] = Some(t1),
+                        (false, Some(t0)) => {
+                            res[j].contact_loss.push(ContactLoss {
+                                wheel: wi,
+                                t_start: t0,
+                                t_end: Some(t1),
+                            });
+                            lane.loss_open[wi] = None;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            self.record_step(&mut res, step + 1);
+        }
+        self.check_finite(self.n_steps);
+        Ok(self
+            .lanes
+            .into_iter()
+            .zip(res)
+            .map(|(lane, mut r)| {
+                if let Some(e) = lane.error {
+                    return Err(e);
+                }
+                for (wi, open) in lane.loss_open.iter().enumerate() {
+                    if let Some(t0) = open {
+                        r.contact_loss.push(ContactLoss {
                             wheel: wi,
-                            t_start: t0,
-                            t_end: Some(t1),
+                            t_start: *t0,
+                            t_end: None,
                         });
-                        loss_open[wi] = None;
                     }
-                    _ => {}
+                }
+                Ok(r)
+            })
+            .collect())
+    }
+
+    /// A non-finite state (overflow from extreme parameters) fails its lane, never gives a
+    /// result.
+    fn check_finite(&mut self, step: usize) {
+        let nw = self.p.len() / W;
+        for j in 0..W {
+            if self.lanes[j].error.is_some() {
+                continue;
+            }
+            let ok = self.track.lane_finite(j)
+                && self.p[j * nw..(j + 1) * nw].iter().all(|v| v.is_finite())
+                && self.cars.iter().all(|c| c.nm.lane_finite(j));
+            if !ok {
+                self.fail(
+                    j,
+                    VtbError::Solver(format!(
+                        "the state became non-finite by step {step}: parameters of extreme magnitude?"
+                    )),
+                );
+            }
+        }
+    }
+
+    fn record_step(&self, res: &mut [RunResult], step: usize) {
+        let no = self.track.n_observed();
+        let nw = self.p.len() / W;
+        for (lane, r) in res.iter_mut().enumerate() {
+            if self.lanes[lane].error.is_some() {
+                continue;
+            }
+            for j in 0..no {
+                let (u, _, a) = self.track.observed(j, lane);
+                r.disp[step * no + j] = u;
+                r.acc[step * no + j] = a;
+            }
+            let p = &self.p[lane * nw..(lane + 1) * nw];
+            if let Some(rc) = &self.correction {
+                // Rail points come first: add the local modes' static deflection.
+                for j in 0..rc.obs.len() {
+                    r.disp[step * no + j] += rc.observed_deflection(j, p);
                 }
             }
-            self.record(&mut res, step + 1);
-        }
-        self.check_finite(self.n_steps)?;
-        for (wi, open) in loss_open.iter().enumerate() {
-            if let Some(t0) = open {
-                res.contact_loss.push(ContactLoss {
-                    wheel: wi,
-                    t_start: *t0,
-                    t_end: None,
-                });
+            let (ncars, ndof) = (r.n_cars, r.vehicle_dofs);
+            for (ci, c) in self.cars.iter().take(ncars).enumerate() {
+                for i in 0..ndof {
+                    let (z, _, a) = c.nm.observed(i, lane);
+                    r.vehicle_disp[(step * ncars + ci) * ndof + i] = z - c.z0[i * W + lane];
+                    r.vehicle_acc[(step * ncars + ci) * ndof + i] = a;
+                }
             }
+            r.contact_force[step * nw..(step + 1) * nw].copy_from_slice(p);
         }
-        Ok(res)
-    }
-
-    /// A non-finite state (overflow from extreme parameters) is an error, never a result.
-    fn check_finite(&self, step: usize) -> Result<()> {
-        let ok = self.track.u.iter().all(|v| v.is_finite())
-            && self.p.iter().all(|v| v.is_finite())
-            && (0..self.track.n_observed()).all(|j| self.track.observed(j).2.is_finite())
-            && self
-                .cars
-                .iter()
-                .all(|c| (0..N_DOF).all(|i| c.nm.observed(i).2.is_finite()));
-        if ok {
-            Ok(())
-        } else {
-            Err(VtbError::Solver(format!(
-                "the state became non-finite by step {step}: parameters of extreme magnitude?"
-            )))
-        }
-    }
-
-    fn record(&self, res: &mut RunResult, step: usize) {
-        let no = self.track.n_observed();
-        for j in 0..no {
-            let (u, _, a) = self.track.observed(j);
-            res.disp[step * no + j] = u;
-            res.acc[step * no + j] = a;
-        }
-        if let Some(rc) = &self.correction {
-            // Rail points come first: add the local modes' static deflection.
-            for j in 0..rc.obs.len() {
-                res.disp[step * no + j] += rc.observed_deflection(j, &self.p);
-            }
-        }
-        let ncars = self.cars.len();
-        for (ci, c) in self.cars.iter().enumerate() {
-            for i in 0..N_DOF {
-                let (z, _, a) = c.nm.observed(i);
-                res.vehicle_disp[(step * ncars + ci) * N_DOF + i] = z - c.z0[i];
-                res.vehicle_acc[(step * ncars + ci) * N_DOF + i] = a;
-            }
-        }
-        let nw = self.p.len();
-        res.contact_force[step * nw..(step + 1) * nw].copy_from_slice(&self.p);
     }
 }
 
@@ -660,4 +1044,109 @@ fn accelerations(m: &CsrMatrix, k: &CsrMatrix, u: &[f64], f: &[f64]) -> Result<V
         return Ok(vec![0.0; u.len()]);
     }
     Ok(Ldlt::new(m)?.solve(&r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::TidConfig;
+    use crate::presets;
+
+    fn short_with_dampers() -> Config {
+        let mut cfg = presets::paper();
+        cfg.solver.t_end = Some(0.05);
+        cfg.tids = Some(TidConfig {
+            inertance: 3.0,
+            stiffness: 1e8,
+            damping: 1e3,
+            count: 3,
+            x0: 30.0,
+            spacing: 0.64,
+            upper: "rail".into(),
+            lower: "slab".into(),
+        });
+        cfg
+    }
+
+    /// Four lanes on one model, one of them on an irregularity that is non-finite from 9 m on: that lane fails with a `Solver` error, the other three give exactly the bits
+    /// of their single runs (different damper parameters and irregularities).
+    #[test]
+    fn a_failing_lane_leaves_its_group_unharmed() {
+        let cfg = short_with_dampers();
+        let smooth = Profile::flat();
+        let wavy = Profile {
+            x0: -1.0,
+            dx: 0.01,
+            values: (0..20_000).map(|i| 1e-4 * (i as f64 * 0.3).sin()).collect(),
+        };
+        let mut broken = wavy.clone();
+        broken
+            .values
+            .iter_mut()
+            .skip(1000)
+            .for_each(|v| *v = f64::NAN);
+        let model = Model::new(cfg.clone(), smooth.clone()).unwrap();
+        let param = |k: f64, b: f64| {
+            vec![
+                DamperParams {
+                    stiffness: k,
+                    damping: 1e3,
+                    inertance: b,
+                };
+                3
+            ]
+        };
+        let lanes = [
+            LaneSpec {
+                profile: &smooth,
+                dampers: param(1e8, 3.0),
+            },
+            LaneSpec {
+                profile: &wavy,
+                dampers: param(7e8, 9.0),
+            },
+            LaneSpec {
+                profile: &broken,
+                dampers: param(2e7, 1.0),
+            },
+            LaneSpec {
+                profile: &wavy,
+                dampers: param(1e4, 5.0),
+            },
+        ];
+        let out = Simulation::<4>::lanes(&model, &lanes, Record::Full)
+            .unwrap()
+            .run_lanes(None)
+            .unwrap();
+        assert!(
+            matches!(out[2], Err(VtbError::Solver(_))),
+            "{:?}",
+            out[2].as_ref().err()
+        );
+        for j in [0, 1, 3] {
+            let alone = Simulation::<1>::lanes(&model, &lanes[j..j + 1], Record::Full)
+                .unwrap()
+                .run_lanes(None)
+                .unwrap()
+                .pop()
+                .unwrap()
+                .unwrap();
+            let got = out[j].as_ref().unwrap();
+            for (a, b) in alone.acc.iter().zip(&got.acc) {
+                assert_eq!(a.to_bits(), b.to_bits(), "lane {j}");
+            }
+            assert_eq!(alone.contact_force, got.contact_force);
+            assert_eq!(alone.metrics(), got.metrics());
+        }
+    }
+
+    #[test]
+    fn lane_widths_keep_every_thread_busy() {
+        assert_eq!(lane_widths(16, 2, 4), vec![4, 4, 4, 4]);
+        assert_eq!(lane_widths(8, 2, 8), vec![4, 4]);
+        assert_eq!(lane_widths(7, 1, 8), vec![4, 2, 1]);
+        assert_eq!(lane_widths(3, 2, 4), vec![2, 1]);
+        assert_eq!(lane_widths(1, 8, 4), vec![1]);
+        assert_eq!(lane_widths(21, 1, 8), vec![8, 8, 4, 1]);
+    }
 }

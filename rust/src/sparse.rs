@@ -338,68 +338,93 @@ impl SymOperator {
         )
     }
 
-    /// ya = A·x, yb = B·x.
-    pub fn mul2(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
-        assert!(x.len() == self.n && ya.len() == self.n && yb.len() == self.n);
-        for (((a, b), (da, db)), xv) in ya
-            .iter_mut()
-            .zip(yb.iter_mut())
-            .zip(self.diag[0].iter().zip(&self.diag[1]))
-            .zip(x)
+    /// ya = A·x, yb = B·x for `W` interleaved vectors (each lane with the operations of a
+    /// single vector).
+    pub fn mul2<const W: usize>(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
+        assert!(x.len() == W * self.n && ya.len() == W * self.n && yb.len() == W * self.n);
+        crate::wide!(<W> (this: &SymOperator = self, x: &[f64] = x, ya: &mut [f64] = ya, yb: &mut [f64] = yb) {
+            this.mul2_kernel::<W>(x, ya, yb)
+        });
+    }
+
+    #[inline(always)]
+    fn mul2_kernel<const W: usize>(&self, x: &[f64], ya: &mut [f64], yb: &mut [f64]) {
+        for ((((a, b), xv), da), db) in ya
+            .chunks_exact_mut(W)
+            .zip(yb.chunks_exact_mut(W))
+            .zip(x.chunks_exact(W))
+            .zip(&self.diag[0])
+            .zip(&self.diag[1])
         {
-            *a = da * xv;
-            *b = db * xv;
-        }
-        for &(i0, len, d, o) in &self.segs {
-            let (va, vb) = (&self.seg_vals[0][o..o + len], &self.seg_vals[1][o..o + len]);
-            if d >= len {
-                // Rows i0.. and i0+d.. are disjoint.
-                let (xlo, xhi) = (&x[i0..i0 + len], &x[i0 + d..i0 + d + len]);
-                for (y, v) in [(&mut *ya, va), (&mut *yb, vb)] {
-                    let (lo, hi) = y.split_at_mut(i0 + d);
-                    let (ylo, yhi) = (&mut lo[i0..i0 + len], &mut hi[..len]);
-                    for q in 0..len {
-                        ylo[q] += v[q] * xhi[q];
-                        yhi[q] += v[q] * xlo[q];
-                    }
-                }
-            } else {
-                for q in 0..len {
-                    ya[i0 + q] += va[q] * x[i0 + d + q];
-                    ya[i0 + d + q] += va[q] * x[i0 + q];
-                    yb[i0 + q] += vb[q] * x[i0 + d + q];
-                    yb[i0 + d + q] += vb[q] * x[i0 + q];
-                }
+            for c in 0..W {
+                a[c] = da * xv[c];
+                b[c] = db * xv[c];
             }
         }
-        // Heavy rows: their column (axpy) and their row (dot). A heavy row's own outputs are
-        // set afterwards, discarding what the axpys of other heavy rows added there.
-        let mut own = Vec::with_capacity(0);
-        let mut own_fixed = [[0.0; 2]; 64];
+        // Entry (i, i + d) updates rows i and i + d: disjoint lane blocks (d ≥ 1).
+        let pair = |y: &mut [f64], lo: usize, hi: usize, v: f64| {
+            let (a, b) = y.split_at_mut(hi * W);
+            let (ylo, yhi) = (&mut a[lo * W..lo * W + W], &mut b[..W]);
+            let (xlo, xhi) = (&x[lo * W..lo * W + W], &x[hi * W..hi * W + W]);
+            for c in 0..W {
+                ylo[c] = v.mul_add(xhi[c], ylo[c]);
+                yhi[c] = v.mul_add(xlo[c], yhi[c]);
+            }
+        };
+        for &(i0, len, d, o) in &self.segs {
+            let (va, vb) = (&self.seg_vals[0][o..o + len], &self.seg_vals[1][o..o + len]);
+            for q in 0..len {
+                pair(ya, i0 + q, i0 + d + q, va[q]);
+                pair(yb, i0 + q, i0 + d + q, vb[q]);
+            }
+        }
+        // Heavy rows as in `mul2`: column axpys, then their own rows set from the dots.
+        let mut own_fixed = [[[0.0; W]; 2]; 64];
+        let mut own_heap = Vec::new();
         let own = if self.heavy.len() <= 64 {
             &mut own_fixed[..self.heavy.len()]
         } else {
-            own.resize(self.heavy.len(), [0.0; 2]);
-            &mut own[..]
+            own_heap.resize(self.heavy.len(), [[0.0; W]; 2]);
+            &mut own_heap[..]
         };
         for ((i, runs), o) in self.heavy.iter().zip(own.iter_mut()) {
-            let xi = x[*i];
+            let xi: [f64; W] = std::array::from_fn(|c| x[i * W + c]);
             for &(s, l, off) in runs {
-                let (da, db) = crate::simd::axpy_dot2(
-                    &mut ya[s..s + l],
-                    &mut yb[s..s + l],
+                let (va, vb) = (
                     &self.heavy_vals[0][off..off + l],
                     &self.heavy_vals[1][off..off + l],
-                    &x[s..s + l],
-                    xi,
                 );
-                o[0] += da;
-                o[1] += db;
+                // One pass: the column's axpys and the row's dots (partial sums by entry
+                // index, as in `simd::dot_lanes`).
+                const P: usize = crate::simd::PARTIAL_SUMS;
+                let mut acc = [[[0.0; W]; P]; 2];
+                let rows = ya[s * W..(s + l) * W]
+                    .chunks_exact_mut(W)
+                    .zip(yb[s * W..(s + l) * W].chunks_exact_mut(W))
+                    .zip(x[s * W..(s + l) * W].chunks_exact(W));
+                for (q, ((ra, rb), xv)) in rows.enumerate() {
+                    let (a, b) = (va[q], vb[q]);
+                    for c in 0..W {
+                        ra[c] = a.mul_add(xi[c], ra[c]);
+                        rb[c] = b.mul_add(xi[c], rb[c]);
+                        acc[0][q % P][c] = a.mul_add(xv[c], acc[0][q % P][c]);
+                        acc[1][q % P][c] = b.mul_add(xv[c], acc[1][q % P][c]);
+                    }
+                }
+                for c in 0..W {
+                    for m in 0..2 {
+                        let a = &acc[m];
+                        o[m][c] += ((a[0][c] + a[1][c]) + (a[2][c] + a[3][c]))
+                            + ((a[4][c] + a[5][c]) + (a[6][c] + a[7][c]));
+                    }
+                }
             }
         }
         for ((i, _), o) in self.heavy.iter().zip(own.iter()) {
-            ya[*i] = o[0];
-            yb[*i] = o[1];
+            for c in 0..W {
+                ya[i * W + c] = o[0][c];
+                yb[i * W + c] = o[1][c];
+            }
         }
     }
 }
@@ -832,10 +857,18 @@ impl Ldlt {
     }
 
     /// z ← L⁻¹·z for `W` interleaved right-hand sides, skipping columns before `start`
-    /// (the caller knows z is zero there). `z.len()` must be `W·n`.
+    /// (the caller knows z is zero there). `z.len()` must be `W·n`. Every lane does the
+    /// operations of a single right-hand side (`simd::dot_lanes`).
     #[inline]
     pub fn forward<const W: usize>(&self, z: &mut [f64], start: usize) {
         assert_eq!(z.len(), W * self.n);
+        crate::wide!(<W> (this: &Ldlt = self, z: &mut [f64] = z, start: usize = start) {
+            this.forward_kernel::<W>(z, start)
+        });
+    }
+
+    #[inline(always)]
+    fn forward_kernel<const W: usize>(&self, z: &mut [f64], start: usize) {
         for unit in &self.units {
             if unit.end() <= start {
                 continue;
@@ -854,15 +887,9 @@ impl Ldlt {
                         // Rows k0+o.. lie beyond the segment's own columns (o ≥ len).
                         let (src, dst) = z.split_at_mut((k0 + o) * W);
                         let (src, dst) = (&src[k0 * W..(k0 + len) * W], &mut dst[..len * W]);
-                        if W == 1 {
-                            for j in 0..len {
-                                dst[j] -= vals[j] * src[j];
-                            }
-                        } else {
-                            for j in 0..len {
-                                for c in 0..W {
-                                    dst[j * W + c] -= vals[j] * src[j * W + c];
-                                }
+                        for j in 0..len {
+                            for c in 0..W {
+                                dst[j * W + c] = (-vals[j]).mul_add(src[j * W + c], dst[j * W + c]);
                             }
                         }
                     }
@@ -879,7 +906,8 @@ impl Ldlt {
                                 let i = *self.row_idx.get_unchecked(p) as usize;
                                 let l = *self.l.get_unchecked(p);
                                 for c in 0..W {
-                                    *z.get_unchecked_mut(i * W + c) -= l * zk[c];
+                                    let zi = z.get_unchecked_mut(i * W + c);
+                                    *zi = (-l).mul_add(zk[c], *zi);
                                 }
                             }
                         }
@@ -890,59 +918,64 @@ impl Ldlt {
         // Border rows as dot products over their runs, then the dense border triangle.
         let (pb, nb) = (self.p, self.n - self.p);
         for g in 0..nb {
-            let mut acc = [[0.0; W]; 2];
+            let mut acc = [0.0; W];
             for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
                 if s + l <= start {
                     continue;
                 }
                 let skip = start.saturating_sub(s);
-                let vals = &self.bval[o + skip..o + l];
-                let zs = &z[(s + skip) * W..(s + l) * W];
-                if W == 1 {
-                    acc[0][0] += crate::simd::dot(vals, zs);
-                } else if W == 4 {
-                    let d = crate::simd::dot4_cols(vals, zs);
-                    for c in 0..W {
-                        acc[0][c] += d[c];
-                    }
-                } else {
-                    for (v, zc) in vals.iter().zip(zs.chunks_exact(W)) {
-                        for c in 0..W {
-                            acc[0][c] += v * zc[c];
-                        }
-                    }
+                let d = crate::simd::dot_lanes::<W>(
+                    &self.bval[o + skip..o + l],
+                    &z[(s + skip) * W..(s + l) * W],
+                );
+                for c in 0..W {
+                    acc[c] += d[c];
                 }
             }
             for (h, v) in self.lbb[g * nb..g * nb + g].iter().enumerate() {
                 for c in 0..W {
-                    acc[0][c] += v * z[(pb + h) * W + c];
+                    acc[c] = v.mul_add(z[(pb + h) * W + c], acc[c]);
                 }
             }
             for c in 0..W {
-                z[(pb + g) * W + c] -= acc[0][c] + acc[1][c];
+                z[(pb + g) * W + c] -= acc[c];
             }
         }
     }
 
-    /// z ← D⁻¹·z then z ← L⁻ᵀ·z for one right-hand side (`z.len()` = n).
+    /// z ← D⁻¹·z then z ← L⁻ᵀ·z for `W` interleaved right-hand sides (`z.len()` = W·n), each
+    /// lane with the operations of a single one.
     #[inline]
-    pub fn diag_backward(&self, z: &mut [f64]) {
-        assert_eq!(z.len(), self.n);
-        for (v, d) in z.iter_mut().zip(&self.d_inv) {
-            *v *= d;
+    pub fn diag_backward<const W: usize>(&self, z: &mut [f64]) {
+        assert_eq!(z.len(), W * self.n);
+        crate::wide!(<W> (this: &Ldlt = self, z: &mut [f64] = z) { this.diag_backward_kernel::<W>(z) });
+    }
+
+    #[inline(always)]
+    fn diag_backward_kernel<const W: usize>(&self, z: &mut [f64]) {
+        for (v, d) in z.chunks_exact_mut(W).zip(&self.d_inv) {
+            for x in v {
+                *x *= d;
+            }
         }
         let (pb, nb) = (self.p, self.n - self.p);
         for g in (0..nb).rev() {
-            let mut s = 0.0;
+            let mut s = [0.0; W];
             for h in g + 1..nb {
-                s += self.lbb[h * nb + g] * z[pb + h];
+                let l = self.lbb[h * nb + g];
+                for c in 0..W {
+                    s[c] = l.mul_add(z[(pb + h) * W + c], s[c]);
+                }
             }
-            z[pb + g] -= s;
+            for c in 0..W {
+                z[(pb + g) * W + c] -= s[c];
+            }
         }
-        let (zi, zb) = z.split_at_mut(pb);
-        for (g, &v) in zb.iter().enumerate() {
+        let (zi, zb) = z.split_at_mut(pb * W);
+        for (g, v) in zb.chunks_exact(W).enumerate() {
+            let minus: [f64; W] = std::array::from_fn(|c| -v[c]);
             for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
-                crate::simd::axpy(&mut zi[s..s + l], &self.bval[o..o + l], -v);
+                crate::simd::axpy_lanes::<W>(&mut zi[s * W..], &self.bval[o..o + l], &minus);
             }
         }
         for unit in self.units.iter().rev() {
@@ -957,34 +990,34 @@ impl Ldlt {
                     for q in 0..n_off {
                         let o = self.seg_off[off + q];
                         let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
-                        let (dst, src) = zi.split_at_mut(k0 + o);
-                        let (dst, src) = (&mut dst[k0..k0 + len], &src[..len]);
+                        let (dst, src) = zi.split_at_mut((k0 + o) * W);
+                        let (dst, src) = (&mut dst[k0 * W..(k0 + len) * W], &src[..len * W]);
                         for j in 0..len {
-                            dst[j] -= vals[j] * src[j];
+                            for c in 0..W {
+                                dst[j * W + c] = (-vals[j]).mul_add(src[j * W + c], dst[j * W + c]);
+                            }
                         }
                     }
                 }
                 Unit::Columns { from, to } => {
                     for k in (from..to).rev() {
                         let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
-                        let mut s = [0.0; 2];
-                        let mut p = a;
-                        // SAFETY: as in `forward`; interior row indices are < p = zi.len().
-                        unsafe {
-                            while p + 1 < b {
-                                s[0] += *self.l.get_unchecked(p)
-                                    * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
-                                s[1] += *self.l.get_unchecked(p + 1)
-                                    * *zi
-                                        .get_unchecked(*self.row_idx.get_unchecked(p + 1) as usize);
-                                p += 2;
-                            }
-                            if p < b {
-                                s[0] += *self.l.get_unchecked(p)
-                                    * *zi.get_unchecked(*self.row_idx.get_unchecked(p) as usize);
+                        // Two partial sums (even and odd entries) halve the latency chain.
+                        let mut s = [[0.0; W]; 2];
+                        for p in a..b {
+                            // SAFETY: as in `forward`; interior row indices are < zi.len()/W.
+                            unsafe {
+                                let i = *self.row_idx.get_unchecked(p) as usize;
+                                let l = *self.l.get_unchecked(p);
+                                for c in 0..W {
+                                    let q = &mut s[(p - a) & 1][c];
+                                    *q = l.mul_add(*zi.get_unchecked(i * W + c), *q);
+                                }
                             }
                         }
-                        zi[k] -= s[0] + s[1];
+                        for c in 0..W {
+                            zi[k * W + c] -= s[0][c] + s[1][c];
+                        }
                     }
                 }
             }
@@ -1000,7 +1033,7 @@ impl Ldlt {
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
         let mut z: Vec<f64> = self.perm.iter().map(|&i| b[i]).collect();
         self.forward::<1>(&mut z, 0);
-        self.diag_backward(&mut z);
+        self.diag_backward::<1>(&mut z);
         let mut x = vec![0.0; self.n];
         for (k, &i) in self.perm.iter().enumerate() {
             x[i] = z[k];

@@ -6,7 +6,7 @@ use crate::config::{Config, CouplingKind, GROUND, Method, TidConfig};
 use crate::couplings::{add_continuous, add_discrete};
 use crate::error::Result;
 use crate::fesea::FeSea;
-use crate::integrator::Attachment;
+use crate::integrator::{Attachment, DamperParams};
 use crate::layers::{Derivative, Layer, gram_blocks};
 use crate::sparse::{Assembler, CsrMatrix};
 
@@ -105,23 +105,14 @@ impl Structure {
             base: None,
         };
         let [m, k, c] = [am, ak, ac].map(Assembler::finish);
-        match &cfg.tids {
-            Some(t) => {
-                let mut full = [&m, &k, &c].map(|a| {
-                    let mut asm = Assembler::new(n);
-                    for i in 0..a.n {
-                        for p in a.row_ptr[i]..a.row_ptr[i + 1] {
-                            asm.add(i, a.col_idx[p], a.values[p]);
-                        }
-                    }
-                    asm
-                });
-                structure.add_tids(t, cfg, n_layers, &mut full);
-                let [fm, fk, fc] = full.map(Assembler::finish);
-                (structure.m, structure.k, structure.c) = (fm, fk, fc);
-                structure.base = Some([m, k, c]);
-            }
-            None => (structure.m, structure.k, structure.c) = (m, k, c),
+        if let Some(t) = &cfg.tids {
+            structure.tids = structure.tid_attachments(t, cfg, n_layers);
+            let params: Vec<DamperParams> = structure.tids.iter().map(DamperParams::from).collect();
+            [structure.m, structure.k, structure.c] =
+                with_dampers([&m, &k, &c], n, &structure.tids, &params);
+            structure.base = Some([m, k, c]);
+        } else {
+            (structure.m, structure.k, structure.c) = (m, k, c);
         }
         Ok(structure)
     }
@@ -137,39 +128,35 @@ impl Structure {
     /// Tuned inerter dampers (model.md §5): DOF `first + i` is damper i's internal node; spring
     /// and dashpot from the upper layer's point to it, inerter from it to the lower layer's
     /// point, all through the layers' shape vectors (g̃ on a hybrid rail).
-    fn add_tids(&mut self, t: &TidConfig, cfg: &Config, first: usize, asm: &mut [Assembler; 3]) {
+    fn tid_attachments(&self, t: &TidConfig, cfg: &Config, first: usize) -> Vec<Attachment> {
         let (upper, lower) = (
             cfg.layer_index(&t.upper).expect("validated"),
             cfg.layer_index(&t.lower).expect("validated"),
         );
-        for i in 0..t.count {
-            let x = t.x0 + i as f64 * t.spacing;
-            let a = Attachment {
-                upper: self.shape(upper, x),
-                lower: self.shape(lower, x),
-                node: first + i,
-                stiffness: t.stiffness,
-                damping: t.damping,
-                inertance: t.inertance,
-            };
-            let [am, ak, ac] = asm;
-            for (asm, s, w) in [
-                (am, &a.lower, a.inertance),
-                (&mut *ak, &a.upper, a.stiffness),
-                (&mut *ac, &a.upper, a.damping),
-            ] {
-                // Two-terminal element w·(e_node − N)(e_node − N)ᵀ.
-                let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
-                dofs.push(a.node);
-                let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
-                v.push(1.0);
-                let block: Vec<f64> = v
-                    .iter()
-                    .flat_map(|p| v.iter().map(move |q| p * q))
-                    .collect();
-                asm.add_block(&dofs, &block, w);
+        (0..t.count)
+            .map(|i| {
+                let x = t.x0 + i as f64 * t.spacing;
+                Attachment {
+                    upper: self.shape(upper, x),
+                    lower: self.shape(lower, x),
+                    node: first + i,
+                    stiffness: t.stiffness,
+                    damping: t.damping,
+                    inertance: t.inertance,
+                }
+            })
+            .collect()
+    }
+
+    /// (M, K) with the dampers at these positions but other parameters (one per damper): the
+    /// matrices of another job of a batch.
+    pub fn with_damper_params(&self, params: &[DamperParams]) -> (CsrMatrix, CsrMatrix) {
+        match &self.base {
+            Some([m, k, c]) => {
+                let [m, k, _] = with_dampers([m, k, c], self.m.n, &self.tids, params);
+                (m, k)
             }
-            self.tids.push(a);
+            None => (self.m.clone(), self.k.clone()),
         }
     }
 
@@ -243,6 +230,45 @@ impl Structure {
 
 /// nᵀ·q for a shape vector n.
 #[inline]
+/// M, K, C of `base` (the layers' DOFs) plus the dampers with the given parameters: each
+/// element w·(e_node − N)(e_node − N)ᵀ (inerter on the lower point, spring and dashpot on
+/// the upper one), in matrices of dimension `n`.
+fn with_dampers(
+    base: [&CsrMatrix; 3],
+    n: usize,
+    tids: &[Attachment],
+    params: &[DamperParams],
+) -> [CsrMatrix; 3] {
+    let mut full = base.map(|a| {
+        let mut asm = Assembler::new(n);
+        for i in 0..a.n {
+            for p in a.row_ptr[i]..a.row_ptr[i + 1] {
+                asm.add(i, a.col_idx[p], a.values[p]);
+            }
+        }
+        asm
+    });
+    for (a, p) in tids.iter().zip(params) {
+        let [am, ak, ac] = &mut full;
+        for (asm, s, w) in [
+            (am, &a.lower, p.inertance),
+            (&mut *ak, &a.upper, p.stiffness),
+            (&mut *ac, &a.upper, p.damping),
+        ] {
+            let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
+            dofs.push(a.node);
+            let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
+            v.push(1.0);
+            let block: Vec<f64> = v
+                .iter()
+                .flat_map(|p| v.iter().map(move |q| p * q))
+                .collect();
+            asm.add_block(&dofs, &block, w);
+        }
+    }
+    full.map(Assembler::finish)
+}
+
 pub fn dot(n: &Shape, q: &[f64]) -> f64 {
     n.values
         .iter()

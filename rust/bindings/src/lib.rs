@@ -10,7 +10,7 @@ use pyo3::types::{PyDict, PyList};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
-use vtb::{Config, Job, Profile, RunResult, VtbError};
+use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
 
 /// Raises the `vtb.errors` exception matching a core error.
 fn to_py_err(py: Python<'_>, e: VtbError) -> PyErr {
@@ -146,11 +146,11 @@ fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bound<'py, PyD
     )?;
     d.set_item(
         "vehicle_disp",
-        PyArray1::from_vec(py, r.vehicle_disp).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?,
+        PyArray1::from_vec(py, r.vehicle_disp).reshape([steps, r.n_cars, r.vehicle_dofs])?,
     )?;
     d.set_item(
         "vehicle_acc",
-        PyArray1::from_vec(py, r.vehicle_acc).reshape([steps, r.n_cars, vtb::vehicle::N_DOF])?,
+        PyArray1::from_vec(py, r.vehicle_acc).reshape([steps, r.n_cars, r.vehicle_dofs])?,
     )?;
     d.set_item(
         "contact_force",
@@ -352,12 +352,13 @@ fn simulate<'py>(
     result_to_dict(py, r)
 }
 
-/// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0) and
-/// returns, in order, each run's metrics dict or its (unraised) exception. `profiles` are
+/// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0; jobs of
+/// one model in lockstep groups) and returns, in order, each run's metrics dict (or with
+/// `histories`, its full result dict) or its (unraised) exception. `profiles` are
 /// (x0, dx, values) triples shared by index through `profile_index`; `progress(done)` is
 /// called from the calling thread as runs finish.
 #[pyfunction]
-#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None))]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES))]
 fn batch<'py>(
     py: Python<'py>,
     configs: Vec<String>,
@@ -365,6 +366,8 @@ fn batch<'py>(
     profile_index: Vec<usize>,
     threads: usize,
     progress: Option<Bound<'py, PyAny>>,
+    histories: bool,
+    max_lanes: usize,
 ) -> PyResult<Bound<'py, PyList>> {
     if configs.len() != profile_index.len() {
         return Err(to_py_err(
@@ -406,7 +409,13 @@ fn batch<'py>(
         .build()
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     let results = run_detached(py, progress.as_ref(), |cancel, done| {
-        pool.install(|| vtb::run_batch(&jobs, Some(cancel), Some(done)))
+        let record = if histories {
+            Record::Full
+        } else {
+            Record::Metrics
+        };
+        let opts = BatchOptions { record, max_lanes };
+        pool.install(|| vtb::run_batch(&jobs, opts, Some(cancel), Some(done)))
     })?;
     let out = PyList::empty(py);
     let mut it = results.into_iter();
@@ -414,7 +423,8 @@ fn batch<'py>(
         let item = match pe {
             Some(e) => make_exception(py, &e)?,
             None => match it.next().expect("one result per parsed config") {
-                Ok(m) => m.into_pyobject(py)?.into_any(),
+                Ok(r) if histories => result_to_dict(py, r)?.into_any(),
+                Ok(r) => r.metrics().into_pyobject(py)?.into_any(),
                 Err(VtbError::Cancelled) => {
                     return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"));
                 }
@@ -436,5 +446,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(shapes, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())
 }
