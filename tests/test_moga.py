@@ -375,3 +375,165 @@ def test_invalid_inputs():
     nan = Problem([0.0, 0.0], [1.0, 1.0], 2, lambda X: (np.full((len(X), 2), np.nan), None))
     with pytest.raises(ValueError, match="non-finite"):
         minimize(nan, pop_size=10, n_gen=2, seed=0)
+
+
+# --------------------------------------------------------------------------------------------
+# Warm start and the hypervolume stop
+# --------------------------------------------------------------------------------------------
+
+TNK, TNK_REF = BENCHMARKS["tnk"][0], BENCHMARKS["tnk"][1]
+
+
+def _identity_objectives(X):
+    return X.copy(), None
+
+
+IDENTITY2 = Problem([0.0, 0.0], [1.0, 1.0], 2, _identity_objectives)
+
+
+def _given_set():
+    """30 points of [0, 1]² with F = X: a first front of 8 points on x + y = 1 and 22 points
+    strictly above it (dominated)."""
+    t = np.linspace(0.0, 1.0, 8)
+    front = np.c_[t, 1.0 - t]
+    rng = np.random.default_rng(4)
+    behind = np.clip(front[rng.integers(0, 8, 22)] + 0.02 + 0.2 * rng.random((22, 2)), 0, 1)
+    return front, np.vstack([behind[:11], front, behind[11:]])
+
+
+def _first_population(problem, algorithm, **kw):
+    seen = []
+    res = minimize(problem, algorithm, callback=lambda g, pop: seen.append((g, pop)), **kw)
+    return res, seen[0]
+
+
+def _rows_in(A, B):
+    return np.array([np.any(np.all(B == a, axis=1)) for a in A])
+
+
+def test_nsga2_warm_start_selects_by_rank_and_crowding():
+    """The 8 front points all survive into the population of 10, with 2 of the dominated ones;
+    no evaluation is spent on generation 1, later generations count only their offspring."""
+    front, X = _given_set()
+    res, (gen1, pop1) = _first_population(IDENTITY2, "nsga2", pop_size=10, n_gen=4, seed=0, initial=(X, X.copy(), None))
+    assert gen1.n_evals == 0
+    assert _rows_in(pop1.X, X).all() and _rows_in(front, pop1.X).all()
+    assert res.n_evals == 3 * 10
+
+
+def test_gamultiobj_warm_start_selects_by_front_quota_and_crowding():
+    """gamultiobj's own trimming: at most floor(0.35 * 10) = 3 points of the first front, its two
+    extremes (infinite crowding) among them, the rest from the dominated points."""
+    front, X = _given_set()
+    _, (gen1, pop1) = _first_population(IDENTITY2, "gamultiobj", pop_size=10, n_gen=2, seed=0, initial=(X, X.copy(), None))
+    assert gen1.n_evals == 0
+    assert _rows_in(pop1.X, X).all()
+    on_front = _rows_in(pop1.X, front)
+    assert on_front.sum() == 3 and np.array_equal(np.flatnonzero(on_front), np.flatnonzero(pop1.rank == 0))
+    assert _rows_in(front[[0, -1]], pop1.X).all()
+
+
+@pytest.mark.parametrize("algorithm", ["nsga2", "gamultiobj"])
+def test_warm_start_ignores_points_outside_the_bounds_and_tops_up(algorithm):
+    """4 distinct points within the bounds (one given twice), 3 outside: the population of 10
+    holds the 4 with their exact X (a log-scale variable included, whose log10 round trip is
+    inexact) and 6 random points, the only evaluations of generation 1."""
+    evaluated = []
+
+    def evaluate(X):
+        evaluated.append(X.copy())
+        return np.c_[X[:, 0], 1.0 / X[:, 1]], None
+
+    problem = Problem([0.0, 1e7], [1.0, 8e8], 2, evaluate, log_scale=[False, True])
+    inside = np.array([[0.1, 2e7], [0.5, 3e7], [0.7, 7e8], [0.9, 9e7]])
+    assert np.any(10 ** np.log10(inside[:, 1]) != inside[:, 1])
+    outside = np.array([[0.5, 9e8], [-0.1, 1e8], [np.nan, np.nan]])
+    X = np.vstack([inside, inside[:1], outside])
+    F = np.c_[X[:, 0], 1.0 / X[:, 1]]
+    _, (gen1, pop1) = _first_population(problem, algorithm, pop_size=10, n_gen=1, seed=0, initial=(X, F, None))
+    assert gen1.n_evals == 6 and len(evaluated) == 1 and len(evaluated[0]) == 6
+    assert _rows_in(inside, pop1.X).all() and not _rows_in(outside[:2], pop1.X).any()
+    assert not _rows_in(evaluated[0], inside).any()
+
+
+def _zdt1_3(X):
+    f1, g = X[:, 0], 1.0 + 4.5 * X[:, 1:].sum(axis=1)
+    return np.c_[f1, g * (1.0 - np.sqrt(f1 / g))], None
+
+
+ZDT1_3 = Problem(np.zeros(3), np.ones(3), 2, _zdt1_3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_warm_start_reaches_the_cold_hypervolume_with_fewer_evaluations(seed):
+    """ZDT1 with 3 variables and a sweep-like grid: x1 in 11 steps, x2 and x3 in
+    {0.02, 0.3, 0.6, 1.5} (1.5 is outside the bounds, as are sweep cases outside the
+    optimiser's), the optimum x2 = x3 = 0 not on it. The cold run: 40 × 80 generations. The
+    warm run, same seed, from the grid (99 of its 176 points within the bounds) with the hypervolume stop
+    (1e-3, 5): it stops earlier, ends with >= 99.5 % of the cold run's final hypervolume, and
+    passes 99.5 % of it after fewer evaluations than the cold run."""
+    x1, other = np.linspace(0, 1, 11), (0.02, 0.3, 0.6, 1.5)
+    X = np.array([(a, b, c) for a in x1 for b in other for c in other])
+    F, _ = _zdt1_3(X)
+    ref = (1.1, 1.1)
+    cold = minimize(ZDT1_3, pop_size=40, n_gen=80, seed=seed, hv_ref=ref)
+    warm = minimize(ZDT1_3, pop_size=40, n_gen=80, seed=seed, hv_ref=ref, initial=(X, F, None), stop_hv=(1e-3, 5))
+    hv_cold = cold.history[-1].hypervolume
+    assert warm.history[0].n_evals == 0 and "hypervolume" in warm.message
+    assert warm.n_evals < cold.n_evals
+    assert warm.history[-1].hypervolume >= 0.995 * hv_cold
+    reached = lambda r: next(h.n_evals for h in r.history if h.hypervolume >= 0.995 * hv_cold)
+    assert reached(warm) < reached(cold)
+    assert warm.history[0].hypervolume < 0.9 * hv_cold  # the grid alone is not the answer
+
+
+def _first_stop(history, tol, window):
+    """The generation the stop rule should end the run at, from the recorded hypervolumes."""
+    hv = [h.hypervolume for h in history]
+    for g in range(window + 1, len(hv) + 1):
+        last = hv[g - window - 1 : g]
+        if last[-1] > 0 and (max(last) - min(last)) / last[-1] < tol:
+            return g
+    return None
+
+
+def _steps(X):
+    """A front of 21 points, f1 = k/20 and f2 = 1 - f1, reached only with x2 < 0.1."""
+    f1 = np.round(20 * X[:, 0]) / 20
+    return np.c_[f1, 1 - f1 + np.floor(10 * X[:, 1]) / 10], None
+
+
+def test_hv_stop_ends_the_run_when_the_front_stops_moving():
+    """The front fills up over the first generations, then cannot move: the run stops at the
+    first generation whose last 6 hypervolumes are equal, with the complete front, long before
+    n_gen."""
+    f1 = np.arange(21) / 20
+    best = hypervolume_2d(np.c_[f1, 1 - f1], (1.1, 2.1))
+    res = minimize(Problem([0.0, 0.0], [1.0, 1.0], 2, _steps), pop_size=30, n_gen=300, seed=0, hv_ref=(1.1, 2.1), stop_hv=(1e-9, 5))
+    assert "hypervolume" in res.message and res.n_gen < 40
+    assert res.n_gen == _first_stop(res.history, 1e-9, 5)
+    assert res.history[-1].hypervolume == pytest.approx(best, rel=1e-12)
+    assert len({h.hypervolume for h in res.history[-6:]}) == 1
+    assert res.history[0].hypervolume < best - 0.1
+
+
+def test_hv_stop_does_not_end_a_run_whose_front_still_moves():
+    res = minimize(ZDT1, pop_size=30, n_gen=25, seed=0, hv_ref=(1.1, 1.1), stop_hv=(1e-3, 5))
+    assert res.message == "reached n_gen = 25"
+    assert _first_stop(res.history, 1e-3, 5) is None
+
+
+def test_warm_start_and_stop_inputs_are_checked():
+    X = np.full((3, 2), 0.5)
+    with pytest.raises(ConfigError, match="initial.F"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, initial=(X, X[:, :1], None))
+    with pytest.raises(ConfigError, match="initial.G"):
+        minimize(TNK, pop_size=4, n_gen=1, initial=(X, X, None))
+    with pytest.raises(ConfigError, match="initial"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, initial=X)
+    with pytest.raises(ConfigError, match="hv_ref"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, stop_hv=(1e-3, 5))
+    for bad in [(0.0, 5), (1e-3, 0), (1e-3, 2.5), (1e-3, 5, 1), ("tight", 5), 1e-3]:
+        with pytest.raises(ConfigError, match="stop_hv"):
+            minimize(IDENTITY2, pop_size=4, n_gen=1, hv_ref=(2, 2), stop_hv=bad)
+
