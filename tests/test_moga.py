@@ -537,3 +537,166 @@ def test_warm_start_and_stop_inputs_are_checked():
         with pytest.raises(ConfigError, match="stop_hv"):
             minimize(IDENTITY2, pop_size=4, n_gen=1, hv_ref=(2, 2), stop_hv=bad)
 
+
+# --------------------------------------------------------------------------------------------
+# Checkpoint and resume
+# --------------------------------------------------------------------------------------------
+
+
+class Killed(Exception):
+    """Stands for the kill of a run."""
+
+
+def _same_run(a, b):
+    for x, y in zip(_result_arrays(a) + [a.pop.G, a.pop.CV], _result_arrays(b) + [b.pop.G, b.pop.CV]):
+        assert np.array_equal(x, y)
+    assert a.history == b.history  # every field of every generation, floats compared exactly
+    assert (a.n_evals, a.n_gen, a.message) == (b.n_evals, b.n_gen, b.message)
+
+
+def _counting(problem):
+    """``problem`` with an evaluate that counts its calls and raises Killed at call ``kill_at``."""
+    calls = []
+
+    def evaluate(X):
+        calls.append(len(X))
+        if len(calls) == evaluate.kill_at:
+            raise Killed
+        return problem.evaluate(X)
+
+    evaluate.kill_at = None
+    return Problem(problem.lower, problem.upper, problem.n_obj, evaluate, problem.n_constr, problem.log_scale), calls
+
+
+@pytest.mark.parametrize("algorithm", ["nsga2", "gamultiobj"])
+def test_killed_run_resumes_bitwise_identical(algorithm, tmp_path):
+    """Killed in the callback after generation 6, then killed again in the middle of generation
+    11 (inside the evaluation): the run resumed from its checkpoint gives exactly the result,
+    history and evaluation count of an uninterrupted run, and evaluates only the generations
+    after the last checkpoint."""
+    kw = dict(pop_size=24, n_gen=15, seed=11, hv_ref=TNK_REF)
+    reference = minimize(TNK, algorithm, **kw)
+    problem, calls = _counting(TNK)
+    ck = tmp_path / "run.ckpt"
+
+    def kill(gen, pop):
+        if gen.gen == 6:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(problem, algorithm, checkpoint=ck, callback=kill, **kw)
+    assert len(calls) == 6
+    problem.evaluate.kill_at = 11
+    with pytest.raises(Killed):
+        minimize(problem, algorithm, checkpoint=ck, **kw)
+    problem.evaluate.kill_at = None
+    calls.clear()
+    resumed = minimize(problem, algorithm, checkpoint=ck, **kw)
+    assert len(calls) == 15 - 10  # generations 11..15
+    _same_run(reference, resumed)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.ckpt"]  # no temporary file left
+    # a finished run's checkpoint gives the result again without evaluating
+    calls.clear()
+    _same_run(reference, minimize(problem, algorithm, checkpoint=ck, **kw))
+    assert calls == []
+
+
+def test_gamultiobj_resumed_run_keeps_its_spread_memory(tmp_path):
+    """The stall test looks back max_stall_generations spreads: a run killed after generation
+    4 and resumed stalls at the generation the uninterrupted run stalls at."""
+    problem = Problem([0.0, 0.0], [1.0, 1.0], 2, _plateau)
+    kw = dict(pop_size=20, n_gen=200, seed=0, max_stall_generations=5)
+    reference = minimize(problem, "gamultiobj", **kw)
+    assert "spread" in reference.message and 6 < reference.n_gen < 30
+
+    def kill(gen, pop):
+        if gen.gen == 4:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(problem, "gamultiobj", checkpoint=tmp_path / "c", callback=kill, **kw)
+    _same_run(reference, minimize(problem, "gamultiobj", checkpoint=tmp_path / "c", **kw))
+
+
+def test_warm_started_run_with_hv_stop_resumes_bitwise_identical(tmp_path):
+    """Initial points and the hypervolume stop are part of the saved run too."""
+    X = np.random.default_rng(0).random((40, 2)) * np.pi
+    kw = dict(pop_size=20, n_gen=40, seed=2, hv_ref=TNK_REF, initial=(X, *tnk(X)), stop_hv=(1e-3, 3))
+    reference = minimize(TNK, **kw)
+    assert "hypervolume" in reference.message and 5 < reference.n_gen < 40
+
+    def kill(gen, pop):
+        if gen.gen == 4:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(TNK, checkpoint=tmp_path / "c", callback=kill, **kw)
+    _same_run(reference, minimize(TNK, checkpoint=tmp_path / "c", **kw))
+
+
+def test_checkpoint_of_another_run_is_refused(tmp_path):
+    ck = tmp_path / "run.ckpt"
+    kw = dict(pop_size=10, n_gen=3, seed=1, checkpoint_identity={"model": "a"})
+    minimize(TNK, checkpoint=ck, **kw)
+    X = np.full((1, 2), 0.5)
+    for change, differs in [
+        (dict(seed=2), "seed"), (dict(pop_size=12), "pop_size"), (dict(n_gen=4), "n_gen"),
+        (dict(eta_c=10.0), "options"), (dict(checkpoint_identity={"model": "b"}), "problem"),
+        (dict(initial=(X, *tnk(X))), "initial"), (dict(hv_ref=TNK_REF), "hv_ref"),
+    ]:
+        with pytest.raises(ConfigError, match=differs) as e:
+            minimize(TNK, checkpoint=ck, **{**kw, **change})
+        assert e.value.field == "checkpoint"
+    other_bounds = Problem([0.0, 0.0], [3.0, np.pi], 2, tnk, n_constr=2)
+    with pytest.raises(ConfigError, match="upper"):
+        minimize(other_bounds, checkpoint=ck, **kw)
+    with pytest.raises(ConfigError, match="algorithm"):
+        minimize(TNK, "gamultiobj", checkpoint=ck, **kw)
+    minimize(TNK, checkpoint=ck, **kw)  # the same run is accepted
+    with pytest.raises(ConfigError) as e:
+        minimize(TNK, pop_size=10, n_gen=3, checkpoint=tmp_path / "x")
+    assert e.value.field == "seed"
+
+
+def test_damaged_checkpoints_are_refused_and_never_unpickled(tmp_path):
+    kw = dict(pop_size=10, n_gen=3, seed=1)
+    good = tmp_path / "good"
+    minimize(TNK, checkpoint=good, **kw)
+    data = good.read_bytes()
+    truncated, text, pickled, foreign = (tmp_path / n for n in ("truncated", "text", "pickled", "foreign"))
+    truncated.write_bytes(data[: len(data) // 2])
+    text.write_text("not a checkpoint\n")
+    with open(pickled, "wb") as f:
+        np.savez(f, header=np.array([{"a": 1}], dtype=object))
+    with open(foreign, "wb") as f:
+        np.savez(f, header=np.array('{"format": "something else"}'))
+    for path, reason in [(truncated, "readable"), (text, "readable"), (pickled, "readable"), (foreign, "not a")]:
+        with pytest.raises(ConfigError, match=reason) as e:
+            minimize(TNK, checkpoint=path, **kw)
+        assert e.value.field == "checkpoint" and str(path) in str(e.value)
+
+
+def test_a_crash_while_saving_keeps_the_previous_checkpoint(tmp_path, monkeypatch):
+    """The save goes through a temporary file: a crash in the middle of writing generation 4
+    leaves generation 3's checkpoint intact (and no temporary file), from which the run resumes
+    to the uninterrupted result."""
+    kw = dict(pop_size=16, n_gen=8, seed=5)
+    reference = minimize(TNK, "gamultiobj", **kw)
+    ck = tmp_path / "run.ckpt"
+    real_savez, saves = np.savez, []
+
+    def crashing_savez(f, **arrays):
+        saves.append(1)
+        if len(saves) == 4:
+            f.write(b"PK\x03\x04 half an archive")
+            raise Killed
+        real_savez(f, **arrays)
+
+    monkeypatch.setattr(np, "savez", crashing_savez)
+    with pytest.raises(Killed):
+        minimize(TNK, "gamultiobj", checkpoint=ck, **kw)
+    monkeypatch.setattr(np, "savez", real_savez)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.ckpt"]
+    with np.load(ck) as z:
+        assert len(__import__("json").loads(str(z["header"]))["history"]) == 3
+    _same_run(reference, minimize(TNK, "gamultiobj", checkpoint=ck, **kw))

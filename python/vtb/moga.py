@@ -58,8 +58,10 @@ Generation counts include the initial population: ``n_gen = 200`` evaluates the 
 population and then 199 generations of offspring (pymoo's convention).
 
 Both algorithms can start warm from points evaluated beforehand (``initial``: the first
-population is chosen from them by the algorithm's own selection and they cost no evaluation)
-and stop when the hypervolume of the front stops moving (``stop_hv``); see :func:`minimize`.
+population is chosen from them by the algorithm's own selection and they cost no evaluation),
+stop when the hypervolume of the front stops moving (``stop_hv``), and save their whole state
+after every generation to a checkpoint file from which a killed run resumes with a bitwise
+identical result (``checkpoint``); see :func:`minimize`.
 
 Building blocks usable on their own: :func:`non_dominated_sort`, :func:`crowding_distance`,
 :func:`constraint_violation`, :func:`hypervolume_2d`, :func:`igd`, :func:`igd_plus` and the
@@ -68,9 +70,14 @@ trade-off selectors :func:`knee_point`, :func:`min_distance_to_ideal` and :func:
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import os
-from dataclasses import dataclass, field
+import uuid
+import zipfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Callable, Optional, Union
 
 import numpy as np
@@ -495,12 +502,21 @@ def _topped_up(given: tuple, n: int, space: _Space, evaluate: _Evaluator, rng: n
 
 
 class _Algorithm:
-    """The population both algorithms keep: internal and natural coordinates (the natural ones
+    """The population both algorithms keep — internal and natural coordinates (the natural ones
     are those evaluated, so points given by the caller keep their exact values), F, G, CV, front
-    rank and crowding."""
+    rank and crowding — and the state a checkpoint saves (:func:`minimize`)."""
+
+    _STATE = ("Z", "X", "F", "G", "CV", "rank", "crowd")
 
     def _points(self) -> tuple:
         return self.Z, self.X, self.F, self.G, self.CV
+
+    def state(self) -> dict:
+        return {k: np.asarray(getattr(self, k)) for k in self._STATE}
+
+    def restore(self, state: dict) -> None:
+        for k in _Algorithm._STATE:
+            setattr(self, k, state[k])
 
 
 # --------------------------------------------------------------------------------------------
@@ -680,6 +696,8 @@ def _front_quota(sizes: np.ndarray, n: int, pareto_fraction: float) -> np.ndarra
 class _Gamultiobj(_Algorithm):
     """gamultiobj state and generation step."""
 
+    _STATE = _Algorithm._STATE + ("gen", "spreads", "extremes")
+
     def __init__(self, space, evaluate, rng, pop_size, opts, max_gen):
         self.space, self.evaluate, self.rng, self.n = space, evaluate, rng, pop_size
         self.o, self.max_gen = opts, max_gen
@@ -698,6 +716,10 @@ class _Gamultiobj(_Algorithm):
             fronts = non_dominated_sort(self.F, self.CV)
             self.rank, self.crowd = _ranks(self.n, fronts), _front_crowding(self.F, fronts)
         self._record_spread()
+
+    def restore(self, state: dict) -> None:
+        super().restore(state)
+        self.gen, self.spreads, self.extremes = int(state["gen"]), state["spreads"].tolist(), state["extremes"]
 
     def step(self):
         self.gen += 1
@@ -791,6 +813,8 @@ def minimize(
     hv_ref=None,
     initial: Optional[tuple] = None,
     stop_hv: Optional[tuple] = None,
+    checkpoint: Union[str, os.PathLike, None] = None,
+    checkpoint_identity=None,
     **options,
 ) -> Result:
     """Minimise ``problem`` with ``"nsga2"`` or ``"gamultiobj"`` (see the module docstring).
@@ -824,6 +848,19 @@ def minimize(
     first front has moved by less than ``tol`` relative over the last ``window`` generations,
     i.e. (max − min) / last < tol over its last window + 1 values, the last one positive. For
     NSGA-II, whose elitism never loses hypervolume, that is (HV_g − HV_(g−window)) / HV_g.
+
+    ``checkpoint``: a file to resume from. After every generation the optimiser's whole state
+    (generation, population, gamultiobj's spreads, evaluation count, history, the random
+    generator's state) is written to it atomically — a temporary file in the same directory,
+    fsync, rename — as a NumPy ``.npz`` archive with a JSON header, read back without
+    unpickling anything. A run given an existing checkpoint resumes after its last generation,
+    and a run killed and resumed gives bitwise the result of an uninterrupted one; so it needs
+    a ``seed``. The checkpoint records what it belongs to (algorithm, pop_size, n_gen, options,
+    bounds, log scales, n_obj, n_constr, the seed's generator state, hv_ref, stop_hv, a hash of
+    ``initial``, and ``checkpoint_identity``: any JSON value naming what ``problem.evaluate``
+    computes) and one of another run is refused. A finished run's checkpoint gives its result
+    again without evaluating; a run stopped by the callback resumes where it stopped. Delete
+    the file to start afresh.
 
     ``options`` — NSGA-II (:data:`NSGA2_DEFAULTS`): SBX ``eta_c`` (15), ``prob_c`` (0.9 per
     mating), ``prob_var_c`` (0.5 per variable); polynomial mutation ``eta_m`` (20),
@@ -880,11 +917,18 @@ def minimize(
         algo = _Gamultiobj(space, evaluate, rng, pop_size, opts, max(n_gen - 1, 1))
 
     history, message = [], ""
+    if checkpoint is not None:
+        if seed is None:
+            raise config_error("seed", None, "a checkpointed run needs a seed (an int or a Generator) to be resumable")
+        checkpoint = Path(checkpoint)
+        identity = _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, checkpoint_identity)
+        if checkpoint.exists():
+            history, message = _resume(checkpoint, identity, algo, rng, evaluate, n_gen)
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=n_gen, desc=f"vtb {algorithm}", unit="gen")
+        bar = tqdm(total=n_gen, initial=len(history), desc=f"vtb {algorithm}", unit="gen")
     try:
         while not message:
             gen = len(history) + 1
@@ -895,6 +939,8 @@ def minimize(
             pop = algo.population()
             history.append(_summary(gen, evaluate.n_evals, pop, hv_ref, algo.spread))
             message = _stop_reason(algo, history, n_gen, stop_hv)
+            if checkpoint is not None:
+                _save_checkpoint(checkpoint, identity, algo, rng, evaluate.n_evals, history, message)
             if bar is not None:
                 bar.update(1)
             if callback is not None and callback(history[-1], pop):
@@ -958,3 +1004,93 @@ def _summary(gen: int, n_evals: int, pop: Population, hv_ref, spread: Optional[f
         cv_min=float(pop.CV.min()), hypervolume=hv, spread=spread,
     )
 
+
+# --------------------------------------------------------------------------------------------
+# Checkpoints
+# --------------------------------------------------------------------------------------------
+
+_CHECKPOINT_FORMAT = "vtb.moga checkpoint 1"
+
+
+def _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, extra) -> dict:
+    """What a checkpoint belongs to, as plain JSON values (compared on resume)."""
+    try:
+        seed_state = json.loads(json.dumps(rng.bit_generator.state))
+    except TypeError:
+        raise config_error("seed", type(rng.bit_generator).__name__, "a checkpoint needs a bit generator whose state is plain integers (PCG64, numpy's default)") from None
+    digest = hashlib.sha256()
+    for a in given[1:4]:
+        digest.update(repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    identity = dict(
+        algorithm=algorithm, pop_size=pop_size, n_gen=n_gen,
+        options={k: None if v is None else float(v) for k, v in opts.items()},
+        lower=problem.lower.tolist(), upper=problem.upper.tolist(), log_scale=problem.log_scale.tolist(),
+        n_obj=problem.n_obj, n_constr=problem.n_constr, seed=seed_state,
+        hv_ref=None if hv_ref is None else np.asarray(hv_ref, dtype=float).tolist(),
+        stop_hv=None if stop_hv is None else list(stop_hv), initial=digest.hexdigest() if len(given[0]) else None,
+    )
+    try:
+        identity["problem"] = json.loads(json.dumps(extra))
+    except (TypeError, ValueError):
+        raise config_error("checkpoint_identity", type(extra).__name__, "must be JSON-serialisable") from None
+    return identity
+
+
+def write_atomically(path: Path, write: Callable) -> None:
+    """Replaces ``path`` by what ``write(binary file)`` writes, atomically: into a temporary file
+    of the same directory, fsynced, renamed over ``path``, and the directory fsynced, so that a
+    crash leaves either the old file or the new one, never a mixture."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, unlike mkstemp's 0600
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    dir_fd = os.open(path.parent, os.O_RDONLY)
+    try:
+        os.fsync(dir_fd)
+    finally:
+        os.close(dir_fd)
+
+
+def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, history: list, message: str) -> None:
+    header = dict(
+        format=_CHECKPOINT_FORMAT, identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
+        message=message, history=[asdict(h) for h in history],
+    )
+    write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
+
+
+def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tuple:
+    """Restores ``algo``, ``rng`` and the evaluation count from the checkpoint ``path``;
+    returns its history and stop message."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            state = {k: z[k] for k in z.files if k != "header"}
+    except (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile) as e:
+        raise config_error("checkpoint", str(path), f"is not a readable vtb.moga checkpoint ({type(e).__name__}: {e})") from None
+    if not isinstance(header, dict) or header.get("format") != _CHECKPOINT_FORMAT:
+        raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")
+    saved = header.get("identity")
+    if saved != identity:
+        differ = sorted(k for k in identity if not isinstance(saved, dict) or saved.get(k) != identity[k])
+        raise config_error("checkpoint", str(path), f"belongs to another run (it differs in {', '.join(differ) or 'its fields'}); delete it or choose another path")
+    n, p = identity["pop_size"], algo.space.problem
+    shapes = dict(Z=(n, p.n_var), X=(n, p.n_var), F=(n, p.n_obj), G=(n, p.n_constr), CV=(n,), rank=(n,), crowd=(n,))
+    try:
+        bad = [k for k in algo._STATE if k not in state] + [k for k, s in shapes.items() if state[k].shape != s]
+        history = [Generation(**g) for g in header["history"]]
+        if bad or not 1 <= len(history) <= n_gen or history[-1].gen != len(history):
+            raise ValueError(f"arrays {bad}, {len(history)} generations")
+        algo.restore(state)
+        rng.bit_generator.state = header["rng"]
+        evaluate.n_evals = int(header["n_evals"])
+        return history, str(header["message"])
+    except (KeyError, TypeError, ValueError, AttributeError) as e:
+        raise config_error("checkpoint", str(path), f"is damaged ({type(e).__name__}: {e})") from None
