@@ -71,7 +71,7 @@ def test_calibrated_preset_matches_the_article_rail_amplitude():
 import inspect
 import sys
 
-from vtb import cli
+from vtb import cli, reproduce
 from vtb.optimize import TidObjectives, warm_start_points
 
 OPT = sys.modules["vtb.optimize"]  # the module (vtb.optimize is the function)
@@ -203,3 +203,20 @@ def test_optimize_command_warm_start_stop_and_checkpoint(short, tmp_path, capsys
     assert cli.main(["optimize", "--config", str(cfg), "--pop", "4", "--gen", "2", "--stop-hv", "1e-3", "2.5", "--no-progress"]) == 2
     assert "stop_hv" in capsys.readouterr().err
 
+
+def test_reproduction_records_hypervolume_against_evaluations(short, swept, tmp_path):
+    """The reproduction's optimisation step, both runs: its CSV holds every generation's
+    evaluations and hypervolume of each run, the warm run's first generation free."""
+    import csv
+
+    sw = vtb.tid_sweep.read_journal(swept)
+    runs = reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), seed=0, optimiser="both", progress=False)
+    with open(tmp_path / "optimisation_history.csv") as f:
+        rows = list(csv.DictReader(f))
+    expected = [(label, h) for label in ("warm", "cold") for h in runs[label][0].moga.history]
+    assert [(r["run"], int(r["gen"]), int(r["n_evals"]), float(r["hypervolume"])) for r in rows] == [
+        (label, h.gen, h.n_evals, h.hypervolume) for label, h in expected
+    ]
+    assert [int(r["n_evals"]) for r in rows] == [0, 4, 4, 8]
+    with pytest.raises(vtb.ConfigError, match="optimiser"):
+        reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), optimiser="lukewarm")
