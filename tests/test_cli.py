@@ -33,7 +33,7 @@ def test_sweep_command_writes_journal_and_report(tmp_path, capsys):
     c.to_toml(cfg)
     out, rep = tmp_path / "s.csv", tmp_path / "s.md"
     assert cli.main(["sweep", "--config", str(cfg), "--b", "5", "--k", "1e8,2e8", "--c", "1000", "--out", str(out), "--report", str(rep), "--no-progress"]) == 0
-    assert len(out.read_text().splitlines()) == 1 + 3
+    assert len(out.read_text().splitlines()) == 2 + 3  # stamp, header, baseline and two cases
     assert "Best (k_t, c_t) per b_t" in rep.read_text()
 
 

@@ -375,3 +375,328 @@ def test_invalid_inputs():
     nan = Problem([0.0, 0.0], [1.0, 1.0], 2, lambda X: (np.full((len(X), 2), np.nan), None))
     with pytest.raises(ValueError, match="non-finite"):
         minimize(nan, pop_size=10, n_gen=2, seed=0)
+
+
+# --------------------------------------------------------------------------------------------
+# Warm start and the hypervolume stop
+# --------------------------------------------------------------------------------------------
+
+TNK, TNK_REF = BENCHMARKS["tnk"][0], BENCHMARKS["tnk"][1]
+
+
+def _identity_objectives(X):
+    return X.copy(), None
+
+
+IDENTITY2 = Problem([0.0, 0.0], [1.0, 1.0], 2, _identity_objectives)
+
+
+def _given_set():
+    """30 points of [0, 1]² with F = X: a first front of 8 points on x + y = 1 and 22 points
+    strictly above it (dominated)."""
+    t = np.linspace(0.0, 1.0, 8)
+    front = np.c_[t, 1.0 - t]
+    rng = np.random.default_rng(4)
+    behind = np.clip(front[rng.integers(0, 8, 22)] + 0.02 + 0.2 * rng.random((22, 2)), 0, 1)
+    return front, np.vstack([behind[:11], front, behind[11:]])
+
+
+def _first_population(problem, algorithm, **kw):
+    seen = []
+    res = minimize(problem, algorithm, callback=lambda g, pop: seen.append((g, pop)), **kw)
+    return res, seen[0]
+
+
+def _rows_in(A, B):
+    return np.array([np.any(np.all(B == a, axis=1)) for a in A])
+
+
+def test_nsga2_warm_start_selects_by_rank_and_crowding():
+    """The 8 front points all survive into the population of 10, with 2 of the dominated ones;
+    no evaluation is spent on generation 1, later generations count only their offspring."""
+    front, X = _given_set()
+    res, (gen1, pop1) = _first_population(IDENTITY2, "nsga2", pop_size=10, n_gen=4, seed=0, initial=(X, X.copy(), None))
+    assert gen1.n_evals == 0
+    assert _rows_in(pop1.X, X).all() and _rows_in(front, pop1.X).all()
+    assert res.n_evals == 3 * 10
+
+
+def test_gamultiobj_warm_start_selects_by_front_quota_and_crowding():
+    """gamultiobj's own trimming: at most floor(0.35 * 10) = 3 points of the first front, its two
+    extremes (infinite crowding) among them, the rest from the dominated points."""
+    front, X = _given_set()
+    _, (gen1, pop1) = _first_population(IDENTITY2, "gamultiobj", pop_size=10, n_gen=2, seed=0, initial=(X, X.copy(), None))
+    assert gen1.n_evals == 0
+    assert _rows_in(pop1.X, X).all()
+    on_front = _rows_in(pop1.X, front)
+    assert on_front.sum() == 3 and np.array_equal(np.flatnonzero(on_front), np.flatnonzero(pop1.rank == 0))
+    assert _rows_in(front[[0, -1]], pop1.X).all()
+
+
+@pytest.mark.parametrize("algorithm", ["nsga2", "gamultiobj"])
+def test_warm_start_ignores_points_outside_the_bounds_and_tops_up(algorithm):
+    """4 distinct points within the bounds (one given twice), 3 outside: the population of 10
+    holds the 4 with their exact X (a log-scale variable included, whose log10 round trip is
+    inexact) and 6 random points, the only evaluations of generation 1."""
+    evaluated = []
+
+    def evaluate(X):
+        evaluated.append(X.copy())
+        return np.c_[X[:, 0], 1.0 / X[:, 1]], None
+
+    problem = Problem([0.0, 1e7], [1.0, 8e8], 2, evaluate, log_scale=[False, True])
+    inside = np.array([[0.1, 2e7], [0.5, 3e7], [0.7, 7e8], [0.9, 9e7]])
+    assert np.any(10 ** np.log10(inside[:, 1]) != inside[:, 1])
+    outside = np.array([[0.5, 9e8], [-0.1, 1e8], [np.nan, np.nan]])
+    X = np.vstack([inside, inside[:1], outside])
+    F = np.c_[X[:, 0], 1.0 / X[:, 1]]
+    _, (gen1, pop1) = _first_population(problem, algorithm, pop_size=10, n_gen=1, seed=0, initial=(X, F, None))
+    assert gen1.n_evals == 6 and len(evaluated) == 1 and len(evaluated[0]) == 6
+    assert _rows_in(inside, pop1.X).all() and not _rows_in(outside[:2], pop1.X).any()
+    assert not _rows_in(evaluated[0], inside).any()
+
+
+def _zdt1_3(X):
+    f1, g = X[:, 0], 1.0 + 4.5 * X[:, 1:].sum(axis=1)
+    return np.c_[f1, g * (1.0 - np.sqrt(f1 / g))], None
+
+
+ZDT1_3 = Problem(np.zeros(3), np.ones(3), 2, _zdt1_3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_warm_start_reaches_the_cold_hypervolume_with_fewer_evaluations(seed):
+    """ZDT1 with 3 variables and a sweep-like grid: x1 in 11 steps, x2 and x3 in
+    {0.02, 0.3, 0.6, 1.5} (1.5 is outside the bounds, as are sweep cases outside the
+    optimiser's), the optimum x2 = x3 = 0 not on it. The cold run: 40 × 80 generations. The
+    warm run, same seed, from the grid (99 of its 176 points within the bounds) with the hypervolume stop
+    (1e-3, 5): it stops earlier, ends with >= 99.5 % of the cold run's final hypervolume, and
+    passes 99.5 % of it after fewer evaluations than the cold run."""
+    x1, other = np.linspace(0, 1, 11), (0.02, 0.3, 0.6, 1.5)
+    X = np.array([(a, b, c) for a in x1 for b in other for c in other])
+    F, _ = _zdt1_3(X)
+    ref = (1.1, 1.1)
+    cold = minimize(ZDT1_3, pop_size=40, n_gen=80, seed=seed, hv_ref=ref)
+    warm = minimize(ZDT1_3, pop_size=40, n_gen=80, seed=seed, hv_ref=ref, initial=(X, F, None), stop_hv=(1e-3, 5))
+    hv_cold = cold.history[-1].hypervolume
+    assert warm.history[0].n_evals == 0 and "hypervolume" in warm.message
+    assert warm.n_evals < cold.n_evals
+    assert warm.history[-1].hypervolume >= 0.995 * hv_cold
+    reached = lambda r: next(h.n_evals for h in r.history if h.hypervolume >= 0.995 * hv_cold)
+    assert reached(warm) < reached(cold)
+    assert warm.history[0].hypervolume < 0.9 * hv_cold  # the grid alone is not the answer
+
+
+def _first_stop(history, tol, window):
+    """The generation the stop rule should end the run at, from the recorded hypervolumes."""
+    hv = [h.hypervolume for h in history]
+    for g in range(window + 1, len(hv) + 1):
+        last = hv[g - window - 1 : g]
+        if last[-1] > 0 and (max(last) - min(last)) / last[-1] < tol:
+            return g
+    return None
+
+
+def _steps(X):
+    """A front of 21 points, f1 = k/20 and f2 = 1 - f1, reached only with x2 < 0.1."""
+    f1 = np.round(20 * X[:, 0]) / 20
+    return np.c_[f1, 1 - f1 + np.floor(10 * X[:, 1]) / 10], None
+
+
+def test_hv_stop_ends_the_run_when_the_front_stops_moving():
+    """The front fills up over the first generations, then cannot move: the run stops at the
+    first generation whose last 6 hypervolumes are equal, with the complete front, long before
+    n_gen."""
+    f1 = np.arange(21) / 20
+    best = hypervolume_2d(np.c_[f1, 1 - f1], (1.1, 2.1))
+    res = minimize(Problem([0.0, 0.0], [1.0, 1.0], 2, _steps), pop_size=30, n_gen=300, seed=0, hv_ref=(1.1, 2.1), stop_hv=(1e-9, 5))
+    assert "hypervolume" in res.message and res.n_gen < 40
+    assert res.n_gen == _first_stop(res.history, 1e-9, 5)
+    assert res.history[-1].hypervolume == pytest.approx(best, rel=1e-12)
+    assert len({h.hypervolume for h in res.history[-6:]}) == 1
+    assert res.history[0].hypervolume < best - 0.1
+
+
+def test_hv_stop_does_not_end_a_run_whose_front_still_moves():
+    res = minimize(ZDT1, pop_size=30, n_gen=25, seed=0, hv_ref=(1.1, 1.1), stop_hv=(1e-3, 5))
+    assert res.message == "reached n_gen = 25"
+    assert _first_stop(res.history, 1e-3, 5) is None
+
+
+def test_warm_start_and_stop_inputs_are_checked():
+    X = np.full((3, 2), 0.5)
+    with pytest.raises(ConfigError, match="initial.F"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, initial=(X, X[:, :1], None))
+    with pytest.raises(ConfigError, match="initial.G"):
+        minimize(TNK, pop_size=4, n_gen=1, initial=(X, X, None))
+    with pytest.raises(ConfigError, match="initial"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, initial=X)
+    with pytest.raises(ConfigError, match="hv_ref"):
+        minimize(IDENTITY2, pop_size=4, n_gen=1, stop_hv=(1e-3, 5))
+    for bad in [(0.0, 5), (1e-3, 0), (1e-3, 2.5), (1e-3, 5, 1), ("tight", 5), 1e-3]:
+        with pytest.raises(ConfigError, match="stop_hv"):
+            minimize(IDENTITY2, pop_size=4, n_gen=1, hv_ref=(2, 2), stop_hv=bad)
+
+
+# --------------------------------------------------------------------------------------------
+# Checkpoint and resume
+# --------------------------------------------------------------------------------------------
+
+
+class Killed(Exception):
+    """Stands for the kill of a run."""
+
+
+def _same_run(a, b):
+    for x, y in zip(_result_arrays(a) + [a.pop.G, a.pop.CV], _result_arrays(b) + [b.pop.G, b.pop.CV]):
+        assert np.array_equal(x, y)
+    assert a.history == b.history  # every field of every generation, floats compared exactly
+    assert (a.n_evals, a.n_gen, a.message) == (b.n_evals, b.n_gen, b.message)
+
+
+def _counting(problem):
+    """``problem`` with an evaluate that counts its calls and raises Killed at call ``kill_at``."""
+    calls = []
+
+    def evaluate(X):
+        calls.append(len(X))
+        if len(calls) == evaluate.kill_at:
+            raise Killed
+        return problem.evaluate(X)
+
+    evaluate.kill_at = None
+    return Problem(problem.lower, problem.upper, problem.n_obj, evaluate, problem.n_constr, problem.log_scale), calls
+
+
+@pytest.mark.parametrize("algorithm", ["nsga2", "gamultiobj"])
+def test_killed_run_resumes_bitwise_identical(algorithm, tmp_path):
+    """Killed in the callback after generation 6, then killed again in the middle of generation
+    11 (inside the evaluation): the run resumed from its checkpoint gives exactly the result,
+    history and evaluation count of an uninterrupted run, and evaluates only the generations
+    after the last checkpoint."""
+    kw = dict(pop_size=24, n_gen=15, seed=11, hv_ref=TNK_REF)
+    reference = minimize(TNK, algorithm, **kw)
+    problem, calls = _counting(TNK)
+    ck = tmp_path / "run.ckpt"
+
+    def kill(gen, pop):
+        if gen.gen == 6:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(problem, algorithm, checkpoint=ck, callback=kill, **kw)
+    assert len(calls) == 6
+    problem.evaluate.kill_at = 11
+    with pytest.raises(Killed):
+        minimize(problem, algorithm, checkpoint=ck, **kw)
+    problem.evaluate.kill_at = None
+    calls.clear()
+    resumed = minimize(problem, algorithm, checkpoint=ck, **kw)
+    assert len(calls) == 15 - 10  # generations 11..15
+    _same_run(reference, resumed)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.ckpt"]  # no temporary file left
+    # a finished run's checkpoint gives the result again without evaluating
+    calls.clear()
+    _same_run(reference, minimize(problem, algorithm, checkpoint=ck, **kw))
+    assert calls == []
+
+
+def test_gamultiobj_resumed_run_keeps_its_spread_memory(tmp_path):
+    """The stall test looks back max_stall_generations spreads: a run killed after generation
+    4 and resumed stalls at the generation the uninterrupted run stalls at."""
+    problem = Problem([0.0, 0.0], [1.0, 1.0], 2, _plateau)
+    kw = dict(pop_size=20, n_gen=200, seed=0, max_stall_generations=5)
+    reference = minimize(problem, "gamultiobj", **kw)
+    assert "spread" in reference.message and 6 < reference.n_gen < 30
+
+    def kill(gen, pop):
+        if gen.gen == 4:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(problem, "gamultiobj", checkpoint=tmp_path / "c", callback=kill, **kw)
+    _same_run(reference, minimize(problem, "gamultiobj", checkpoint=tmp_path / "c", **kw))
+
+
+def test_warm_started_run_with_hv_stop_resumes_bitwise_identical(tmp_path):
+    """Initial points and the hypervolume stop are part of the saved run too."""
+    X = np.random.default_rng(0).random((40, 2)) * np.pi
+    kw = dict(pop_size=20, n_gen=40, seed=2, hv_ref=TNK_REF, initial=(X, *tnk(X)), stop_hv=(1e-3, 3))
+    reference = minimize(TNK, **kw)
+    assert "hypervolume" in reference.message and 5 < reference.n_gen < 40
+
+    def kill(gen, pop):
+        if gen.gen == 4:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(TNK, checkpoint=tmp_path / "c", callback=kill, **kw)
+    _same_run(reference, minimize(TNK, checkpoint=tmp_path / "c", **kw))
+
+
+def test_checkpoint_of_another_run_is_refused(tmp_path):
+    ck = tmp_path / "run.ckpt"
+    kw = dict(pop_size=10, n_gen=3, seed=1, checkpoint_identity={"model": "a"})
+    minimize(TNK, checkpoint=ck, **kw)
+    X = np.full((1, 2), 0.5)
+    for change, differs in [
+        (dict(seed=2), "seed"), (dict(pop_size=12), "pop_size"), (dict(n_gen=4), "n_gen"),
+        (dict(eta_c=10.0), "options"), (dict(checkpoint_identity={"model": "b"}), "problem"),
+        (dict(initial=(X, *tnk(X))), "initial"), (dict(hv_ref=TNK_REF), "hv_ref"),
+    ]:
+        with pytest.raises(ConfigError, match=differs) as e:
+            minimize(TNK, checkpoint=ck, **{**kw, **change})
+        assert e.value.field == "checkpoint"
+    other_bounds = Problem([0.0, 0.0], [3.0, np.pi], 2, tnk, n_constr=2)
+    with pytest.raises(ConfigError, match="upper"):
+        minimize(other_bounds, checkpoint=ck, **kw)
+    with pytest.raises(ConfigError, match="algorithm"):
+        minimize(TNK, "gamultiobj", checkpoint=ck, **kw)
+    minimize(TNK, checkpoint=ck, **kw)  # the same run is accepted
+    with pytest.raises(ConfigError) as e:
+        minimize(TNK, pop_size=10, n_gen=3, checkpoint=tmp_path / "x")
+    assert e.value.field == "seed"
+
+
+def test_damaged_checkpoints_are_refused_and_never_unpickled(tmp_path):
+    kw = dict(pop_size=10, n_gen=3, seed=1)
+    good = tmp_path / "good"
+    minimize(TNK, checkpoint=good, **kw)
+    data = good.read_bytes()
+    truncated, text, pickled, foreign = (tmp_path / n for n in ("truncated", "text", "pickled", "foreign"))
+    truncated.write_bytes(data[: len(data) // 2])
+    text.write_text("not a checkpoint\n")
+    with open(pickled, "wb") as f:
+        np.savez(f, header=np.array([{"a": 1}], dtype=object))
+    with open(foreign, "wb") as f:
+        np.savez(f, header=np.array('{"format": "something else"}'))
+    for path, reason in [(truncated, "readable"), (text, "readable"), (pickled, "readable"), (foreign, "not a")]:
+        with pytest.raises(ConfigError, match=reason) as e:
+            minimize(TNK, checkpoint=path, **kw)
+        assert e.value.field == "checkpoint" and str(path) in str(e.value)
+
+
+def test_a_crash_while_saving_keeps_the_previous_checkpoint(tmp_path, monkeypatch):
+    """The save goes through a temporary file: a crash in the middle of writing generation 4
+    leaves generation 3's checkpoint intact (and no temporary file), from which the run resumes
+    to the uninterrupted result."""
+    kw = dict(pop_size=16, n_gen=8, seed=5)
+    reference = minimize(TNK, "gamultiobj", **kw)
+    ck = tmp_path / "run.ckpt"
+    real_savez, saves = np.savez, []
+
+    def crashing_savez(f, **arrays):
+        saves.append(1)
+        if len(saves) == 4:
+            f.write(b"PK\x03\x04 half an archive")
+            raise Killed
+        real_savez(f, **arrays)
+
+    monkeypatch.setattr(np, "savez", crashing_savez)
+    with pytest.raises(Killed):
+        minimize(TNK, "gamultiobj", checkpoint=ck, **kw)
+    monkeypatch.setattr(np, "savez", real_savez)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.ckpt"]
+    with np.load(ck) as z:
+        assert len(__import__("json").loads(str(z["header"]))["history"]) == 3
+    _same_run(reference, minimize(TNK, "gamultiobj", checkpoint=ck, **kw))

@@ -62,3 +62,161 @@ def test_calibrated_preset_matches_the_article_rail_amplitude():
     """The one calibrated number (docs/reproduction.md)."""
     m = vtb.simulate(vtb.paper_config(calibrated=True)).metrics()
     assert m["rail_acc_max"] == pytest.approx(ARTICLE_RAIL_ACC, rel=0.005)
+
+
+# --------------------------------------------------------------------------------------------
+# Checkpoint, warm start, hypervolume stop
+# --------------------------------------------------------------------------------------------
+
+import inspect
+import sys
+
+from vtb import cli, reproduce
+from vtb.optimize import TidObjectives, warm_start_points
+
+OPT = sys.modules["vtb.optimize"]  # the module (vtb.optimize is the function)
+
+
+class Killed(Exception):
+    pass
+
+
+def _same_optimisation(a, b):
+    assert list(a.pareto) == list(b.pareto)
+    for k in a.pareto:
+        assert np.array_equal(a.pareto[k], b.pareto[k], equal_nan=True), k
+    assert a.moga.history == b.moga.history and a.moga.n_evals == b.moga.n_evals
+    assert np.array_equal(a.moga.pop.X, b.moga.pop.X) and np.array_equal(a.moga.pop.F, b.moga.pop.F)
+
+
+def _batch_calls(monkeypatch, kill_at=None):
+    """Counts the cases of each Rust batch of the optimiser; raises Killed at call ``kill_at``."""
+    calls, real = [], OPT.simulate_batch
+
+    def counting(configs, **kw):
+        calls.append(len(configs))
+        if len(calls) == kill_at:
+            raise Killed
+        return real(configs, **kw)
+
+    monkeypatch.setattr(OPT, "simulate_batch", counting)
+    return calls
+
+
+def test_killed_optimisation_resumes_to_the_uninterrupted_result(short, result, tmp_path, monkeypatch):
+    """Killed while evaluating generation 3, resumed from the checkpoint of generation 2: the
+    Pareto set (metrics included) and the history are those of the uninterrupted run. Called
+    again, the finished checkpoint gives the same result with an empty evaluation cache: only
+    the front's runs are redone, for its metrics."""
+    ck = tmp_path / "opt.npz"
+    calls = _batch_calls(monkeypatch, kill_at=3)
+    with pytest.raises(Killed):
+        vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    calls = _batch_calls(monkeypatch)
+    resumed = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    assert calls[0] == 8 and len(calls) <= 2  # generation 3, then any front point found before the kill
+    _same_optimisation(result, resumed)
+    calls.clear()
+    again = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    assert calls == [len(result)]
+    _same_optimisation(result, again)
+    other = short.copy()
+    other.speed = 70.0
+    with pytest.raises(vtb.ConfigError, match="problem") as e:
+        vtb.optimize(other, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    assert e.value.field == "checkpoint"
+
+
+def test_hypervolume_reference_is_the_uncontrolled_point(result):
+    """The recorded hypervolume is that of the Pareto set's (a_rm, a_sm) against (a_rm0, a_sm0)."""
+    p, b = result.pareto, result.baseline
+    hv = moga.hypervolume_2d(np.c_[p["rail_acc_max"], p["slab_acc_max"]], (b["rail_acc_max"], b["slab_acc_max"]))
+    assert hv > 0 and result.moga.history[-1].hypervolume == pytest.approx(hv, rel=1e-12)
+
+
+def test_defaults_are_the_article_cold_budget():
+    sig = inspect.signature(vtb.optimize).parameters
+    assert (sig["pop_size"].default, sig["n_gen"].default) == (100, 100)
+    assert sig["warm_start"].default is None and sig["stop_hv"].default is None
+    args = cli.build_parser().parse_args(["optimize"])
+    assert (args.pop, args.gen, args.warm_start, args.stop_hv, args.checkpoint) == (100, 100, None, None, None)
+
+
+@pytest.fixture(scope="module")
+def swept(short, tmp_path_factory):
+    """A sweep journal of 6 TID cases, 4 within the optimiser's bounds (k_t = 1e9 is not)."""
+    out = tmp_path_factory.mktemp("warm") / "sweep.csv"
+    vtb.sweep(short, b_t=[2.0, 5.0], k_t=[1e8, 2e8, 1e9], c_t=[1e3], out=out, progress=False)
+    return out
+
+
+def test_warm_start_points_are_what_the_evaluator_computes(short, result, swept):
+    X, F, G, metrics = warm_start_points(swept, short, result.baseline)
+    assert len(X) == 6
+    inside = X[:, 1] <= 8e8
+    F_run, G_run = TidObjectives(short, result.baseline)(X[inside])
+    assert np.array_equal(F[inside], F_run) and np.array_equal(G[inside], G_run)
+    assert [m["rail_acc_max"] for m in metrics] == list(F[:, 0])
+
+
+def test_warm_started_optimisation_uses_the_sweep(short, swept, monkeypatch):
+    """Population 6 from the 4 sweep cases within the bounds plus 2 random points (the only
+    runs of generation 1); sweep cases reach the Pareto set with the sweep's metrics, not run
+    again; a SweepResult and its journal give the same run."""
+    calls = _batch_calls(monkeypatch)
+    a = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=swept)
+    assert a.moga.history[0].n_evals == 2 and calls[0] == 2 and a.moga.n_evals == 2 + 6
+    assert np.any((a.pareto["k_t"] == 1e8) & (a.pareto["c_t"] == 1e3))  # a sweep case on the front
+    assert sum(calls) == a.moga.n_evals
+    b = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=vtb.tid_sweep.read_journal(swept))
+    _same_optimisation(a, b)
+
+
+def test_warm_start_of_another_configuration_or_a_bad_journal_is_refused(short, swept, tmp_path):
+    other = short.copy()
+    other.speed = 70.0
+    with pytest.raises(vtb.ConfigError, match="another configuration") as e:
+        vtb.optimize(other, pop_size=4, n_gen=1, progress=False, warm_start=swept)
+    assert e.value.field == "warm_start"
+    bad = tmp_path / "bad.csv"
+    lines = swept.read_text().splitlines(keepends=True)
+    bad.write_text("".join(lines[:3]) + "1,2\n")
+    with pytest.raises(vtb.ConfigError, match="line 4") as e:
+        vtb.optimize(short, pop_size=4, n_gen=1, progress=False, warm_start=bad)
+    assert e.value.field == "warm_start"
+
+
+def test_optimize_command_warm_start_stop_and_checkpoint(short, tmp_path, capsys):
+    """vtb sweep, then vtb optimize warm-started from its journal with a checkpoint; the same
+    command again finds the finished checkpoint and evaluates nothing."""
+    cfg = tmp_path / "short.toml"
+    short.to_toml(cfg)
+    journal, ck = tmp_path / "s.csv", tmp_path / "opt.npz"
+    assert cli.main(["sweep", "--config", str(cfg), "--b", "5", "--k", "1e8,2e8", "--c", "1000", "--out", str(journal), "--no-progress"]) == 0
+    command = ["optimize", "--config", str(cfg), "--pop", "4", "--gen", "2", "--warm-start", str(journal), "--stop-hv", "1e-3", "3", "--checkpoint", str(ck), "--no-progress"]
+    capsys.readouterr()
+    assert cli.main(command) == 0
+    first = capsys.readouterr().out
+    assert "# 2 generations, 6 evaluations (reached n_gen = 2)" in first
+    assert cli.main(command) == 0
+    assert capsys.readouterr().out == first
+    assert cli.main(["optimize", "--config", str(cfg), "--pop", "4", "--gen", "2", "--stop-hv", "1e-3", "2.5", "--no-progress"]) == 2
+    assert "stop_hv" in capsys.readouterr().err
+
+
+def test_reproduction_records_hypervolume_against_evaluations(short, swept, tmp_path):
+    """The reproduction's optimisation step, both runs: its CSV holds every generation's
+    evaluations and hypervolume of each run, the warm run's first generation free."""
+    import csv
+
+    sw = vtb.tid_sweep.read_journal(swept)
+    runs = reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), seed=0, optimiser="both", progress=False)
+    with open(tmp_path / "optimisation_history.csv") as f:
+        rows = list(csv.DictReader(f))
+    expected = [(label, h) for label in ("warm", "cold") for h in runs[label][0].moga.history]
+    assert [(r["run"], int(r["gen"]), int(r["n_evals"]), float(r["hypervolume"])) for r in rows] == [
+        (label, h.gen, h.n_evals, h.hypervolume) for label, h in expected
+    ]
+    assert [int(r["n_evals"]) for r in rows] == [0, 4, 4, 8]
+    with pytest.raises(vtb.ConfigError, match="optimiser"):
+        reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), optimiser="lukewarm")

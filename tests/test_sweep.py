@@ -1,6 +1,7 @@
 """The TID sweep: parallel paths give identical results, nothing is lost, analyses by hand."""
 
 import math
+from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -196,3 +197,182 @@ def test_analyses_refuse_a_sweep_without_successes():
     s.columns["error"] = np.array(["x"] * len(s))
     with pytest.raises(vtb.VtbError):
         s.best()
+
+
+# --------------------------------------------------------------------------------------------
+# Journal integrity
+# --------------------------------------------------------------------------------------------
+
+ONE = dict(b_t=[5.0], k_t=[2e8], c_t=[1e3])
+
+
+def _recording(monkeypatch):
+    """Records the (b_t, k_t, c_t) of every case run (None for the baseline)."""
+    ran = []
+    real = sweep_mod._run_chunk
+
+    def recording(config, cases, threads):
+        ran.extend(None if math.isnan(b) else (b, k, c) for _, b, k, c in cases)
+        return real(config, cases, threads)
+
+    monkeypatch.setattr(sweep_mod, "_run_chunk", recording)
+    return ran
+
+
+@pytest.fixture(scope="module")
+def journal_lines(short, tmp_path_factory):
+    """The lines of a valid journal of ONE: stamp, header, baseline row, one TID row."""
+    out = tmp_path_factory.mktemp("journal") / "s.csv"
+    vtb.sweep(short, **ONE, out=out, progress=False)
+    return out.read_text().splitlines(keepends=True)
+
+
+def test_journal_carries_its_configuration_and_nothing_else(short, journal_lines, tmp_path):
+    import json
+
+    stamp = journal_lines[0]
+    assert stamp.startswith("# vtb sweep journal ")
+    body = json.loads(stamp[len("# vtb sweep journal "):])
+    assert body["format"] == 1 and body["config"] == short.to_dict()
+    assert journal_lines[1].strip() == ",".join(sweep_mod.JOURNAL_COLUMNS)
+    assert len(journal_lines) == 4
+    out = tmp_path / "s.csv"
+    vtb.sweep(short, **ONE, out=out, progress=False)
+    assert [p.name for p in tmp_path.iterdir()] == ["s.csv"]  # no side file, the lock is gone
+
+
+def test_extended_grid_reruns_only_the_new_cases(short, reference, tmp_path, monkeypatch):
+    """A journal of b_t = 5, k_t = 2e8 (there case 1) extended to GRID (where it is case 4):
+    only the three new parameter sets run and the result is the fresh sweep's."""
+    out = tmp_path / "s.csv"
+    vtb.sweep(short, **ONE, out=out, progress=False)
+    ran = _recording(monkeypatch)
+    extended = vtb.sweep(short, **GRID, out=out, progress=False)
+    assert sorted(ran) == [(2.0, 1e8, 1e3), (2.0, 2e8, 1e3), (5.0, 1e8, 1e3)]
+    _same(reference, extended)
+    ran.clear()
+    back = vtb.sweep(short, **ONE, out=out, progress=False)  # the smaller grid again: all reused
+    assert ran == [] and list(back.columns["case"]) == [0, 1] and back.columns["k_t"][1] == 2e8
+
+
+def test_failed_cases_are_retried_on_resume(short, reference, tmp_path, monkeypatch):
+    out = tmp_path / "s.csv"
+    real = sweep_mod._run_chunk
+
+    def failing(config, cases, threads):
+        rows = real(config, cases, threads)
+        for r in rows:
+            if (r["b_t"], r["k_t"]) == (5.0, 1e8):
+                r.update({m: math.nan for m in METRICS}, error="ConvergenceError: made up")
+        return rows
+
+    monkeypatch.setattr(sweep_mod, "_run_chunk", failing)
+    first = vtb.sweep(short, **GRID, out=out, progress=False)
+    assert list(first.columns["error"]).count("ConvergenceError: made up") == 1
+    monkeypatch.undo()
+    ran = _recording(monkeypatch)
+    second = vtb.sweep(short, **GRID, out=out, progress=False)
+    assert ran == [(5.0, 1e8, 1e3)]
+    _same(reference, second)
+    ran.clear()
+    vtb.sweep(short, **GRID, out=out, progress=False)
+    assert ran == []
+    # the journal keeps both rows; the successful one is the case's
+    assert sum(line.startswith("5.0,100000000.0,") for line in out.read_text().splitlines()) == 2
+    _same(reference, sweep_mod.read_journal(out))
+
+
+def test_repeated_rows_the_last_successful_one_wins(short, journal_lines, tmp_path, monkeypatch):
+    """Two successful rows of one key: the later counts; a failed row after them changes
+    nothing (and triggers no re-run); only failures of a key make it run again."""
+    row = journal_lines[3].split(",")
+    later = ",".join([*row[:3], "123.0", *row[4:]])
+    failed = ",".join([*row[:3]] + ["nan"] * len(METRICS) + ["SolverError: made up\n"])
+    out = tmp_path / "s.csv"
+    out.write_text("".join(journal_lines) + later + failed)
+    ran = _recording(monkeypatch)
+    r = vtb.sweep(short, **ONE, out=out, progress=False)
+    assert ran == [] and r.columns["rail_acc_max"][1] == 123.0 and r.columns["error"][1] == ""
+    out.write_text("".join(journal_lines[:3]) + failed + failed)
+    r = vtb.sweep(short, **ONE, out=out, progress=False)
+    assert ran == [(5.0, 2e8, 1e3)] and r.columns["error"][1] == ""
+    assert r.columns["rail_acc_max"][1] == float(row[3])
+
+
+def _corrupt(lines, number, new):
+    lines = list(lines)
+    lines[number - 1] = new
+    return "".join(lines)
+
+
+CORRUPTIONS = {
+    "wrong header": (2, lambda L: _corrupt(L, 2, L[1].replace("rail_acc_max", "rail_acc_mx"))),
+    "non-numeric value": (4, lambda L: _corrupt(L, 4, L[3].replace(L[3].split(",")[4], "fast", 1))),
+    "missing field": (3, lambda L: _corrupt(L, 3, L[2].split(",", 1)[1])),
+    "extra field": (4, lambda L: _corrupt(L, 4, "1.0," + L[3])),
+    "half a baseline key": (4, lambda L: _corrupt(L, 4, "nan," + L[3].split(",", 1)[1])),
+    "stamp does not parse": (1, lambda L: _corrupt(L, 1, L[0][:200] + "\n")),
+    "stamp of a bad config": (1, lambda L: _corrupt(L, 1, L[0].replace('"speed": 80.0', '"speed": "fast"'))),
+    "no stamp (old journal)": (1, lambda L: "".join(L[1:])),
+    "not a journal": (1, lambda L: "hello\nworld\n"),
+}
+
+
+@pytest.mark.parametrize("kind", list(CORRUPTIONS))
+def test_corrupt_journal_is_refused_with_its_line(short, journal_lines, tmp_path, monkeypatch, kind):
+    number, corrupt = CORRUPTIONS[kind]
+    out = tmp_path / "s.csv"
+    out.write_text(corrupt(journal_lines))
+    before = out.read_bytes()
+    ran = _recording(monkeypatch)
+    with pytest.raises(vtb.ConfigError, match=f"line {number}:") as e:
+        vtb.sweep(short, **ONE, out=out, progress=False)
+    assert e.value.field == "out" and str(out) in str(e.value)
+    assert ran == [] and out.read_bytes() == before
+    with pytest.raises(vtb.ConfigError, match=f"line {number}:"):
+        sweep_mod.read_journal(out)
+
+
+def test_partial_last_line_is_still_dropped(short, journal_lines, tmp_path, monkeypatch):
+    out = tmp_path / "s.csv"
+    out.write_text("".join(journal_lines[:3]) + journal_lines[3][:40])
+    assert len(sweep_mod.read_journal(out)) == 1  # a reader ignores it without touching the file
+    ran = _recording(monkeypatch)
+    r = vtb.sweep(short, **ONE, out=out, progress=False)
+    assert ran == [(5.0, 2e8, 1e3)] and r.columns["error"][1] == ""
+    assert out.read_text() == "".join(journal_lines)
+
+
+_HOLDER = """
+import sys, time
+from pathlib import Path
+from vtb.tid_sweep import _journal_lock
+with _journal_lock(Path(sys.argv[1])):
+    print("locked", flush=True)
+    time.sleep(120)
+"""
+
+
+def test_a_second_sweep_on_a_journal_in_use_is_refused(short, tmp_path):
+    """Another process holds the journal's lock: the sweep is refused naming ``out`` and the
+    holder's pid. Killed (SIGKILL, no clean-up), the holder leaves its lock file, which no
+    longer blocks: the kernel released the lock with the process."""
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "s.csv"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(vtb.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]))
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, str(out)], stdout=subprocess.PIPE, text=True, env=env)
+    try:
+        assert holder.stdout.readline() == "locked\n"
+        with pytest.raises(vtb.ConfigError, match=f"pid {holder.pid} ") as e:
+            vtb.sweep(short, **ONE, out=out, progress=False)
+        assert e.value.field == "out" and "another sweep" in str(e.value)
+    finally:
+        holder.kill()
+        holder.wait()
+    lock = tmp_path / "s.csv.lock"
+    assert lock.read_text().startswith(f"pid {holder.pid} ")  # the stale lock file, with its pid
+    r = vtb.sweep(short, **ONE, out=out, progress=False)
+    assert r.columns["error"][1] == "" and not lock.exists()

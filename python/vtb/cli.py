@@ -112,7 +112,12 @@ def cmd_optimize(args) -> int:
     from .optimize import optimize
 
     cfg = _tid_config(args)
-    res = optimize(cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads, progress=not args.no_progress)
+    res = optimize(
+        cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads,
+        progress=not args.no_progress, warm_start=args.warm_start, stop_hv=args.stop_hv, checkpoint=args.checkpoint,
+    )
+    h = res.moga.history[-1]
+    print(f"# {res.moga.n_gen} generations, {res.moga.n_evals} evaluations ({res.moga.message}); hypervolume {h.hypervolume:.6g} (m/s²)² against (a_rm0, a_sm0)")
     rows = res.table()
     print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline['rail_acc_max']:.2f}, a_sm0 = {res.baseline['slab_acc_max']:.3f} m/s²")
     for r in rows:
@@ -192,6 +197,9 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--seed", type=int, default=0)
     o.add_argument("--algorithm", choices=["nsga2", "gamultiobj"], default="nsga2")
     o.add_argument("--out", help="CSV file for the Pareto set")
+    o.add_argument("--warm-start", metavar="JOURNAL", help="start from the cases of this sweep journal (same configuration) within the bounds instead of a random population")
+    o.add_argument("--stop-hv", nargs=2, type=float, metavar=("TOL", "WINDOW"), help="stop once the front's hypervolume moved by less than TOL (relative) over WINDOW generations (default: run all --gen)")
+    o.add_argument("--checkpoint", metavar="PATH", help="save the optimiser's state after every generation; an existing checkpoint of the same run is resumed")
     o.set_defaults(func=cmd_optimize)
 
     e = sub.add_parser("examples", help="list the example configurations shipped with vtb, or print one as TOML")

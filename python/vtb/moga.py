@@ -57,6 +57,12 @@ Algorithms (:func:`minimize`):
 Generation counts include the initial population: ``n_gen = 200`` evaluates the random
 population and then 199 generations of offspring (pymoo's convention).
 
+Both algorithms can start warm from points evaluated beforehand (``initial``: the first
+population is chosen from them by the algorithm's own selection and they cost no evaluation),
+stop when the hypervolume of the front stops moving (``stop_hv``), and save their whole state
+after every generation to a checkpoint file from which a killed run resumes with a bitwise
+identical result (``checkpoint``); see :func:`minimize`.
+
 Building blocks usable on their own: :func:`non_dominated_sort`, :func:`crowding_distance`,
 :func:`constraint_violation`, :func:`hypervolume_2d`, :func:`igd`, :func:`igd_plus` and the
 trade-off selectors :func:`knee_point`, :func:`min_distance_to_ideal` and :func:`asf`.
@@ -64,9 +70,14 @@ trade-off selectors :func:`knee_point`, :func:`min_distance_to_ideal` and :func:
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import os
-from dataclasses import dataclass, field
+import uuid
+import zipfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Callable, Optional, Union
 
 import numpy as np
@@ -406,6 +417,11 @@ class _Space:
         # 10**log10(b) can miss the bound b by an ulp
         return np.clip(X, self.problem.lower, self.problem.upper)
 
+    def internal(self, X: np.ndarray) -> np.ndarray:
+        Z = X.copy()
+        Z[:, self.log] = np.log10(X[:, self.log])
+        return Z
+
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return self.lo + rng.random((n, self.lo.size)) * self.width
 
@@ -415,7 +431,8 @@ class _Space:
 
 
 class _Evaluator:
-    """Evaluates internal points, in process or in chunks on an executor, and checks shapes."""
+    """Evaluates internal points, in process or in chunks on an executor, and checks shapes.
+    Returns the points of a population: internal and natural coordinates, F, G, CV."""
 
     def __init__(self, problem: Problem, space: _Space, executor, n_chunks: Optional[int]):
         self.problem, self.space, self.executor = problem, space, executor
@@ -432,7 +449,7 @@ class _Evaluator:
             parts = [self._checked(f.result(), len(c)) for f, c in zip(futures, chunks)]
             F, G = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
         self.n_evals += len(X)
-        return F, G, constraint_violation(G, len(X))
+        return Z, X, F, G, constraint_violation(G, len(X))
 
     def _checked(self, out, n: int):
         p = self.problem
@@ -472,13 +489,43 @@ def _ranks(n: int, fronts: list) -> np.ndarray:
     return rank
 
 
+def _stack(a: tuple, b: tuple) -> tuple:
+    """The rows of two point tuples (Z, X, F, G, CV), those of ``a`` first."""
+    return tuple(np.concatenate([u, v]) for u, v in zip(a, b))
+
+
+def _topped_up(given: tuple, n: int, space: _Space, evaluate: _Evaluator, rng: np.random.Generator) -> tuple:
+    """The already evaluated points ``given`` (Z, X, F, G, CV), with random samples evaluated
+    after them when they are fewer than ``n``."""
+    missing = n - len(given[0])
+    return given if missing <= 0 else _stack(given, evaluate(space.sample(missing, rng)))
+
+
+class _Algorithm:
+    """The population both algorithms keep — internal and natural coordinates (the natural ones
+    are those evaluated, so points given by the caller keep their exact values), F, G, CV, front
+    rank and crowding — and the state a checkpoint saves (:func:`minimize`)."""
+
+    _STATE = ("Z", "X", "F", "G", "CV", "rank", "crowd")
+
+    def _points(self) -> tuple:
+        return self.Z, self.X, self.F, self.G, self.CV
+
+    def state(self) -> dict:
+        return {k: np.asarray(getattr(self, k)) for k in self._STATE}
+
+    def restore(self, state: dict) -> None:
+        for k in _Algorithm._STATE:
+            setattr(self, k, state[k])
+
+
 # --------------------------------------------------------------------------------------------
 # NSGA-II
 # --------------------------------------------------------------------------------------------
 
 
-class _NSGA2:
-    """NSGA-II state (internal coordinates ``Z``) and generation step."""
+class _NSGA2(_Algorithm):
+    """NSGA-II state and generation step."""
 
     # pymoo-style fixed budget: no convergence test, hence no spread either
     spread = None
@@ -489,24 +536,23 @@ class _NSGA2:
         n_var = space.lo.size
         self.prob_var_m = min(0.5, 1.0 / n_var) if opts["prob_var_m"] is None else opts["prob_var_m"]
 
-    def initialise(self):
-        Z = self.space.sample(self.n, self.rng)
-        self._survive(Z, *self.evaluate(Z))
+    def initialise(self, given: tuple):
+        """The first population: the survivors of ``given`` topped up with random samples."""
+        self._survive(*_topped_up(given, self.n, self.space, self.evaluate, self.rng))
 
     def step(self):
         off = self._offspring()
         if len(off):
-            F, G, CV = self.evaluate(off)
-            self._survive(np.vstack([self.Z, off]), np.vstack([self.F, F]), np.vstack([self.G, G]), np.r_[self.CV, CV])
+            self._survive(*_stack(self._points(), self.evaluate(off)))
 
     def stalled(self) -> bool:
         return False
 
     def population(self) -> Population:
         rank = _ranks(len(self.F), non_dominated_sort(self.F, self.CV))
-        return Population(self.space.natural(self.Z), self.F, self.G, self.CV, rank)
+        return Population(self.X, self.F, self.G, self.CV, rank)
 
-    def _survive(self, Z, F, G, CV):
+    def _survive(self, Z, X, F, G, CV):
         """Rank-and-crowding survival of the best ``n`` points, pymoo style: feasible points by
         front and crowding, then infeasible ones by CV. Rank and crowding are those of the
         merged set (the split front keeps its full-front crowding values), which the
@@ -526,7 +572,7 @@ class _NSGA2:
         infeas = np.flatnonzero(CV > 0)
         survivors.extend(infeas[np.argsort(CV[infeas], kind="stable")][: self.n - len(survivors)])
         s = np.asarray(survivors, dtype=int)
-        self.Z, self.F, self.G, self.CV, self.rank, self.crowd = Z[s], F[s], G[s], CV[s], rank[s], crowd[s]
+        self.Z, self.X, self.F, self.G, self.CV, self.rank, self.crowd = Z[s], X[s], F[s], G[s], CV[s], rank[s], crowd[s]
 
     def _tournament(self, n_select: int) -> np.ndarray:
         """Binary tournaments over concatenated random permutations of the population."""
@@ -647,8 +693,10 @@ def _front_quota(sizes: np.ndarray, n: int, pareto_fraction: float) -> np.ndarra
     return keep
 
 
-class _Gamultiobj:
-    """gamultiobj state (internal coordinates ``Z``) and generation step."""
+class _Gamultiobj(_Algorithm):
+    """gamultiobj state and generation step."""
+
+    _STATE = _Algorithm._STATE + ("gen", "spreads", "extremes")
 
     def __init__(self, space, evaluate, rng, pop_size, opts, max_gen):
         self.space, self.evaluate, self.rng, self.n = space, evaluate, rng, pop_size
@@ -657,12 +705,21 @@ class _Gamultiobj:
         self.spreads: list = []
         self.extremes = None
 
-    def initialise(self):
-        self.Z = self.space.sample(self.n, self.rng)
-        self.F, self.G, self.CV = self.evaluate(self.Z)
-        fronts = non_dominated_sort(self.F, self.CV)
-        self.rank, self.crowd = _ranks(self.n, fronts), _front_crowding(self.F, fronts)
+    def initialise(self, given: tuple):
+        """The first population: ``given`` topped up with random samples, trimmed to ``n`` like
+        every generation when there are more."""
+        points = _topped_up(given, self.n, self.space, self.evaluate, self.rng)
+        if len(points[0]) > self.n:
+            self._trim(*points)
+        else:
+            self.Z, self.X, self.F, self.G, self.CV = points
+            fronts = non_dominated_sort(self.F, self.CV)
+            self.rank, self.crowd = _ranks(self.n, fronts), _front_crowding(self.F, fronts)
         self._record_spread()
+
+    def restore(self, state: dict) -> None:
+        super().restore(state)
+        self.gen, self.spreads, self.extremes = int(state["gen"]), state["spreads"].tolist(), state["extremes"]
 
     def step(self):
         self.gen += 1
@@ -671,8 +728,7 @@ class _Gamultiobj:
         p1, p2 = self.Z[parents[:n_x]], self.Z[parents[n_x : 2 * n_x]]
         xkids = p1 + self.rng.random(p1.shape) * (p2 - p1)  # intermediate, Ratio 1
         kids = np.vstack([xkids, self._mutate(self.Z[parents[2 * n_x :]])])
-        F, G, CV = self.evaluate(kids)
-        self._trim(np.vstack([self.Z, kids]), np.vstack([self.F, F]), np.vstack([self.G, G]), np.r_[self.CV, CV])
+        self._trim(*_stack(self._points(), self.evaluate(kids)))
         self._record_spread()
 
     @property
@@ -680,7 +736,7 @@ class _Gamultiobj:
         return self.spreads[-1]
 
     def population(self) -> Population:
-        return Population(self.space.natural(self.Z), self.F, self.G, self.CV, self.rank)
+        return Population(self.X, self.F, self.G, self.CV, self.rank)
 
     def _tournament(self, n_select: int) -> np.ndarray:
         """Tournaments of two players drawn with replacement: lower rank wins, then larger
@@ -704,7 +760,7 @@ class _Gamultiobj:
         # optima often sit
         return np.clip(P + step, self.space.lo, self.space.hi)
 
-    def _trim(self, Z, F, G, CV):
+    def _trim(self, Z, X, F, G, CV):
         """Keep ``n`` of parents + children: a controlled number per front (see
         :func:`_front_quota`), within a front the largest crowding distances (ties at random).
         Ranks and distances are those of the merged set, as in MATLAB."""
@@ -712,7 +768,7 @@ class _Gamultiobj:
         rank, crowd = _ranks(len(F), fronts), _front_crowding(F, fronts)
         quota = _front_quota(np.array([len(f) for f in fronts]), self.n, self.o["pareto_fraction"])
         keep = np.concatenate([f[_descending(crowd[f], self.rng)[:q]] for f, q in zip(fronts, quota)])
-        self.Z, self.F, self.G, self.CV, self.rank, self.crowd = Z[keep], F[keep], G[keep], CV[keep], rank[keep], crowd[keep]
+        self.Z, self.X, self.F, self.G, self.CV, self.rank, self.crowd = Z[keep], X[keep], F[keep], G[keep], CV[keep], rank[keep], crowd[keep]
 
     def _record_spread(self):
         """Appends MATLAB's spread of the first front (see the module docstring)."""
@@ -755,17 +811,21 @@ def minimize(
     executor=None,
     n_chunks: Optional[int] = None,
     hv_ref=None,
+    initial: Optional[tuple] = None,
+    stop_hv: Optional[tuple] = None,
+    checkpoint: Union[str, os.PathLike, None] = None,
+    checkpoint_identity=None,
     **options,
 ) -> Result:
     """Minimise ``problem`` with ``"nsga2"`` or ``"gamultiobj"`` (see the module docstring).
 
     ``pop_size``: default 100 for NSGA-II; 50 when n_var <= 5, else 200 for gamultiobj.
     ``n_gen``: generations including the initial population; default 200 for NSGA-II (which
-    always runs them all unless the callback stops it) and 200 * n_var + 1 for gamultiobj
-    (MATLAB's MaxGenerations after the initial population; the spread test may stop earlier).
-    ``seed``: an int, ``None`` or a :class:`numpy.random.Generator`; the same seed gives the
-    same result. ``callback(generation, population)`` runs after every generation with a
-    :class:`Generation` and the :class:`Population`; returning ``True`` stops the run.
+    always runs them all unless the callback or ``stop_hv`` stops it) and 200 * n_var + 1 for
+    gamultiobj (MATLAB's MaxGenerations after the initial population; the spread test may stop
+    earlier). ``seed``: an int, ``None`` or a :class:`numpy.random.Generator`; the same seed
+    gives the same result. ``callback(generation, population)`` runs after every generation
+    with a :class:`Generation` and the :class:`Population`; returning ``True`` stops the run.
     ``progress=True`` shows a tqdm bar.
 
     ``executor``: an optional :class:`concurrent.futures.Executor`. Each generation is then
@@ -776,6 +836,31 @@ def minimize(
 
     ``hv_ref``: a reference point (2 objectives) to record the hypervolume of the feasible
     first front in the history.
+
+    ``initial=(X, F, G)``: points evaluated beforehand (natural units; ``G`` may be ``None``
+    without constraints), e.g. the cases of a parameter sweep. The first population is chosen
+    among those within the bounds (each distinct point once) by the algorithm's own selection —
+    NSGA-II's rank-and-crowding survival, gamultiobj's front quotas and crowding — instead of
+    being sampled, and topped up with random samples when fewer than ``pop_size`` are left.
+    They cost no evaluation: ``n_evals`` counts only new ones, and keep their exact X.
+
+    ``stop_hv=(tol, window)`` (needs ``hv_ref``): stop once the hypervolume of the feasible
+    first front has moved by less than ``tol`` relative over the last ``window`` generations,
+    i.e. (max − min) / last < tol over its last window + 1 values, the last one positive. For
+    NSGA-II, whose elitism never loses hypervolume, that is (HV_g − HV_(g−window)) / HV_g.
+
+    ``checkpoint``: a file to resume from. After every generation the optimiser's whole state
+    (generation, population, gamultiobj's spreads, evaluation count, history, the random
+    generator's state) is written to it atomically — a temporary file in the same directory,
+    fsync, rename — as a NumPy ``.npz`` archive with a JSON header, read back without
+    unpickling anything. A run given an existing checkpoint resumes after its last generation,
+    and a run killed and resumed gives bitwise the result of an uninterrupted one; so it needs
+    a ``seed``. The checkpoint records what it belongs to (algorithm, pop_size, n_gen, options,
+    bounds, log scales, n_obj, n_constr, the seed's generator state, hv_ref, stop_hv, a hash of
+    ``initial``, and ``checkpoint_identity``: any JSON value naming what ``problem.evaluate``
+    computes) and one of another run is refused. A finished run's checkpoint gives its result
+    again without evaluating; a run stopped by the callback resumes where it stopped. Delete
+    the file to start afresh.
 
     ``options`` — NSGA-II (:data:`NSGA2_DEFAULTS`): SBX ``eta_c`` (15), ``prob_c`` (0.9 per
     mating), ``prob_var_c`` (0.5 per variable); polynomial mutation ``eta_m`` (20),
@@ -810,47 +895,104 @@ def minimize(
             raise config_error(name, value, f"must be in {'(' if open_lo else '['}{lo}, {hi}]")
     if hv_ref is not None and problem.n_obj != 2:
         raise config_error("hv_ref", hv_ref, "the recorded hypervolume needs 2 objectives")
+    if stop_hv is not None:
+        try:
+            tol, window = float(stop_hv[0]), float(stop_hv[1])
+            ok = len(stop_hv) == 2 and tol > 0 and window >= 1 and window.is_integer()
+        except (TypeError, ValueError, IndexError):
+            ok = False
+        if not ok:
+            raise config_error("stop_hv", stop_hv, "must be (tol > 0, window >= 1 generations)")
+        if hv_ref is None:
+            raise config_error("stop_hv", stop_hv, "needs hv_ref, the hypervolume's reference point")
+        stop_hv = (tol, int(window))
 
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     space = _Space(problem)
+    given = _given_points(problem, space, initial)
     evaluate = _Evaluator(problem, space, executor, n_chunks)
     if algorithm == "nsga2":
         algo = _NSGA2(space, evaluate, rng, pop_size, opts)
     else:
         algo = _Gamultiobj(space, evaluate, rng, pop_size, opts, max(n_gen - 1, 1))
 
+    history, message = [], ""
+    if checkpoint is not None:
+        if seed is None:
+            raise config_error("seed", None, "a checkpointed run needs a seed (an int or a Generator) to be resumable")
+        checkpoint = Path(checkpoint)
+        identity = _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, checkpoint_identity)
+        if checkpoint.exists():
+            history, message = _resume(checkpoint, identity, algo, rng, evaluate, n_gen)
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=n_gen, desc=f"vtb {algorithm}", unit="gen")
-    history, message = [], f"reached n_gen = {n_gen}"
+        bar = tqdm(total=n_gen, initial=len(history), desc=f"vtb {algorithm}", unit="gen")
     try:
-        for gen in range(1, n_gen + 1):
+        while not message:
+            gen = len(history) + 1
             if gen == 1:
-                algo.initialise()
+                algo.initialise(given)
             else:
                 algo.step()
             pop = algo.population()
             history.append(_summary(gen, evaluate.n_evals, pop, hv_ref, algo.spread))
+            message = _stop_reason(algo, history, n_gen, stop_hv)
+            if checkpoint is not None:
+                _save_checkpoint(checkpoint, identity, algo, rng, evaluate.n_evals, history, message)
             if bar is not None:
                 bar.update(1)
             if callback is not None and callback(history[-1], pop):
                 message = "stopped by callback"
-                break
-            if algo.stalled():
-                message = "average change in the spread of Pareto solutions less than function_tolerance"
-                break
     finally:
         if bar is not None:
             bar.close()
 
+    pop = algo.population()
     best = pop.rank == 0
     return Result(
         X=pop.X[best], F=pop.F[best], G=pop.G[best], CV=pop.CV[best], feasible=pop.CV[best] <= 0,
         pop=pop, history=history, n_evals=evaluate.n_evals, n_gen=len(history), algorithm=algorithm,
         message=message,
     )
+
+
+def _given_points(problem: Problem, space: _Space, initial) -> tuple:
+    """``initial = (X, F, G)`` as population points (Z, X, F, G, CV): the rows within the
+    bounds, each distinct point once (empty arrays without ``initial``)."""
+    n_var, n_obj, n_constr = problem.n_var, problem.n_obj, problem.n_constr
+    if initial is None:
+        X, F, G = np.empty((0, n_var)), np.empty((0, n_obj)), np.empty((0, n_constr))
+    else:
+        if not (isinstance(initial, (tuple, list)) and len(initial) == 3):
+            raise config_error("initial", type(initial).__name__, "must be (X, F, G) of already evaluated points")
+        X, F, G = initial
+        X, F = np.asarray(X, dtype=float), np.asarray(F, dtype=float)
+        G = np.empty((len(X), 0)) if G is None and n_constr == 0 else np.asarray(G, dtype=float)
+        for name, a, cols in (("X", X, n_var), ("F", F, n_obj), ("G", G, n_constr)):
+            if a.shape != (len(X), cols):
+                raise config_error(f"initial.{name}", a.shape, f"must have shape ({len(X)}, {cols})")
+        inside = np.all((X >= problem.lower) & (X <= problem.upper), axis=1)
+        X, F, G = X[inside], F[inside], np.where(np.isnan(G[inside]), np.inf, G[inside])
+        if not np.isfinite(F).all():
+            raise config_error("initial.F", "non-finite", "objectives within the bounds must be finite")
+    Z = space.internal(X)
+    new = _new_points(space.unit(Z), Z[:0])
+    return Z[new], X[new], F[new], G[new], constraint_violation(G[new], int(new.sum()))
+
+
+def _stop_reason(algo, history: list, n_gen: int, stop_hv) -> str:
+    """Why the run stops after the last generation of ``history`` ("" to go on)."""
+    if algo.stalled():
+        return "average change in the spread of Pareto solutions less than function_tolerance"
+    if stop_hv is not None and len(history) > stop_hv[1]:
+        hv = np.array([h.hypervolume for h in history[-(stop_hv[1] + 1):]])
+        if hv[-1] > 0 and (hv.max() - hv.min()) / hv[-1] < stop_hv[0]:
+            return f"hypervolume moved by less than {stop_hv[0]:g} (relative) over the last {stop_hv[1]} generations"
+    if len(history) >= n_gen:
+        return f"reached n_gen = {n_gen}"
+    return ""
 
 
 def _summary(gen: int, n_evals: int, pop: Population, hv_ref, spread: Optional[float]) -> Generation:
@@ -861,3 +1003,94 @@ def _summary(gen: int, n_evals: int, pop: Population, hv_ref, spread: Optional[f
         gen=gen, n_evals=n_evals, n_feasible=int(feasible.sum()), n_front=int(front.sum()),
         cv_min=float(pop.CV.min()), hypervolume=hv, spread=spread,
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Checkpoints
+# --------------------------------------------------------------------------------------------
+
+_CHECKPOINT_FORMAT = "vtb.moga checkpoint 1"
+
+
+def _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, extra) -> dict:
+    """What a checkpoint belongs to, as plain JSON values (compared on resume)."""
+    try:
+        seed_state = json.loads(json.dumps(rng.bit_generator.state))
+    except TypeError:
+        raise config_error("seed", type(rng.bit_generator).__name__, "a checkpoint needs a bit generator whose state is plain integers (PCG64, numpy's default)") from None
+    digest = hashlib.sha256()
+    for a in given[1:4]:
+        digest.update(repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    identity = dict(
+        algorithm=algorithm, pop_size=pop_size, n_gen=n_gen,
+        options={k: None if v is None else float(v) for k, v in opts.items()},
+        lower=problem.lower.tolist(), upper=problem.upper.tolist(), log_scale=problem.log_scale.tolist(),
+        n_obj=problem.n_obj, n_constr=problem.n_constr, seed=seed_state,
+        hv_ref=None if hv_ref is None else np.asarray(hv_ref, dtype=float).tolist(),
+        stop_hv=None if stop_hv is None else list(stop_hv), initial=digest.hexdigest() if len(given[0]) else None,
+    )
+    try:
+        identity["problem"] = json.loads(json.dumps(extra))
+    except (TypeError, ValueError):
+        raise config_error("checkpoint_identity", type(extra).__name__, "must be JSON-serialisable") from None
+    return identity
+
+
+def write_atomically(path: Path, write: Callable) -> None:
+    """Replaces ``path`` by what ``write(binary file)`` writes, atomically: into a temporary file
+    of the same directory, fsynced, renamed over ``path``, and the directory fsynced, so that a
+    crash leaves either the old file or the new one, never a mixture."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, unlike mkstemp's 0600
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    dir_fd = os.open(path.parent, os.O_RDONLY)
+    try:
+        os.fsync(dir_fd)
+    finally:
+        os.close(dir_fd)
+
+
+def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, history: list, message: str) -> None:
+    header = dict(
+        format=_CHECKPOINT_FORMAT, identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
+        message=message, history=[asdict(h) for h in history],
+    )
+    write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
+
+
+def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tuple:
+    """Restores ``algo``, ``rng`` and the evaluation count from the checkpoint ``path``;
+    returns its history and stop message."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            state = {k: z[k] for k in z.files if k != "header"}
+    except (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile) as e:
+        raise config_error("checkpoint", str(path), f"is not a readable vtb.moga checkpoint ({type(e).__name__}: {e})") from None
+    if not isinstance(header, dict) or header.get("format") != _CHECKPOINT_FORMAT:
+        raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")
+    saved = header.get("identity")
+    if saved != identity:
+        differ = sorted(k for k in identity if not isinstance(saved, dict) or saved.get(k) != identity[k])
+        raise config_error("checkpoint", str(path), f"belongs to another run (it differs in {', '.join(differ) or 'its fields'}); delete it or choose another path")
+    n, p = identity["pop_size"], algo.space.problem
+    shapes = dict(Z=(n, p.n_var), X=(n, p.n_var), F=(n, p.n_obj), G=(n, p.n_constr), CV=(n,), rank=(n,), crowd=(n,))
+    try:
+        bad = [k for k in algo._STATE if k not in state] + [k for k, s in shapes.items() if state[k].shape != s]
+        history = [Generation(**g) for g in header["history"]]
+        if bad or not 1 <= len(history) <= n_gen or history[-1].gen != len(history):
+            raise ValueError(f"arrays {bad}, {len(history)} generations")
+        algo.restore(state)
+        rng.bit_generator.state = header["rng"]
+        evaluate.n_evals = int(header["n_evals"])
+        return history, str(header["message"])
+    except (KeyError, TypeError, ValueError, AttributeError) as e:
+        raise config_error("checkpoint", str(path), f"is damaged ({type(e).__name__}: {e})") from None

@@ -4,22 +4,30 @@ Objectives: the rail and slab acceleration amplitudes (a_rm, a_sm); constraints:
 a_rRMS and a_rst below their uncontrolled values, written normalised as X/X0 − 1 ≤ 0; bounds
 1 ≤ b_t ≤ 10 kg, 1e7 ≤ k_t ≤ 8e8 N/m, 10 ≤ c_t ≤ 5e3 N·s/m, k_t and c_t searched on a log scale
 (they span decades). Each generation is one Rust batch call (all cores, GIL released).
+
+Hypervolumes (history, ``stop_hv``) are those of the feasible first front in (a_rm, a_sm)
+with the uncontrolled values (a_rm0, a_sm0) as reference point: every feasible design lies
+below it, and it depends on the configuration only, so the hypervolumes of a cold and a
+warm-started run of one configuration are comparable.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
-from typing import Optional
+from pathlib import Path
+from typing import Optional, Union
 
 import numpy as np
 
 from . import moga
 from .config import Config
-from .errors import VtbError
+from .errors import VtbError, config_error
 from .presets import tids_around
 from .simulate import Result, simulate, simulate_batch
-from .tid_sweep import METRICS, case_config
+from .tid_sweep import METRICS, SweepResult, case_config, config_stamp, read_journal
 
 #: (lower, upper) of b_t (kg), k_t (N/m), c_t (N·s/m): the article's bounds.
 BOUNDS = ((1.0, 10.0), (1e7, 8e8), (10.0, 5e3))
@@ -28,12 +36,20 @@ LOG_SCALE = (False, True, True)
 CONSTRAINTS = ("rail_acc_max", "slab_acc_max", "rail_acc_rms", "rail_acc_settle")
 
 
+def objectives(metrics: dict, baseline: dict) -> tuple:
+    """F = (a_rm, a_sm) and G = X/X0 − 1 of the :data:`CONSTRAINTS` for one run's metrics."""
+    F = [metrics["rail_acc_max"], metrics["slab_acc_max"]]
+    G = [metrics[m] / baseline[m] - 1.0 if baseline[m] > 0 else metrics[m] for m in CONSTRAINTS]
+    return F, G
+
+
 @dataclasses.dataclass
 class TidObjectives:
     """The evaluation of one generation (picklable, for executors): X rows (b_t, k_t, c_t) →
     F = (a_rm, a_sm), G = X/X0 − 1 for the four constrained indices. A failed run counts as
     infeasible (G = ∞) with F = 10 × the uncontrolled values. ``cache`` keeps every run's
-    metrics by (b_t, k_t, c_t) when evaluated in process."""
+    metrics by (b_t, k_t, c_t) when evaluated in process; it only saves runs (a run is
+    deterministic), so nothing depends on what it holds."""
 
     config: Config
     baseline: dict
@@ -51,8 +67,7 @@ class TidObjectives:
                 G[i] = np.inf
                 continue
             self.cache[tuple(x)] = {m: float(r[m]) for m in METRICS}
-            F[i] = [r["rail_acc_max"], r["slab_acc_max"]]
-            G[i] = [r[m] / self.baseline[m] - 1.0 if self.baseline[m] > 0 else r[m] for m in CONSTRAINTS]
+            F[i], G[i] = objectives(r, self.baseline)
         return F, G
 
 
@@ -110,6 +125,25 @@ class OptimizationResult:
         return simulate(case_config(self.config, math.nan, 0, 0)), simulate(case_config(self.config, c["b_t"], c["k_t"], c["c_t"]))
 
 
+def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config, baseline: dict) -> tuple:
+    """The successful TID cases of a sweep (a :class:`~vtb.tid_sweep.SweepResult` or a journal
+    path) as ``(X, F, G, metrics)`` of this optimisation: X rows (b_t, k_t, c_t), F and G as
+    :class:`TidObjectives` computes them against ``baseline``, and each case's metrics. The sweep
+    must be of ``config`` (same stamp) and its uncontrolled run must equal ``baseline``; the
+    optimiser keeps the points within :data:`BOUNDS`."""
+    sw = warm_start if isinstance(warm_start, SweepResult) else read_journal(warm_start, field="warm_start")
+    label = "SweepResult" if isinstance(warm_start, SweepResult) else str(warm_start)
+    if config_stamp(sw.config) != config_stamp(config):
+        raise config_error("warm_start", label, "is a sweep of another configuration")
+    if sw.baseline != {m: baseline[m] for m in METRICS}:
+        raise config_error("warm_start", label, "its uncontrolled run differs from this configuration's (a sweep computed by another vtb version?)")
+    c, ok = sw.columns, np.flatnonzero(sw.controlled)
+    X = np.column_stack([c["b_t"][ok], c["k_t"][ok], c["c_t"][ok]])
+    metrics = [{m: float(c[m][i]) for m in METRICS} for i in ok]
+    FG = [objectives(r, baseline) for r in metrics]
+    return X, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)), metrics
+
+
 def optimize(
     config: Config,
     *,
@@ -120,12 +154,31 @@ def optimize(
     threads: Optional[int] = None,
     executor=None,
     progress: bool = True,
+    warm_start: Union[SweepResult, str, Path, None] = None,
+    stop_hv: Optional[tuple] = None,
+    checkpoint: Union[str, Path, None] = None,
     **options,
 ) -> OptimizationResult:
     """Optimises the dampers of ``config`` (default :func:`vtb.tids_around`) for (a_rm, a_sm)
     under the article's constraints and bounds. ``algorithm``: ``"nsga2"`` or ``"gamultiobj"``
     (see :mod:`vtb.moga`); ``executor``: evaluate generations through it instead of the
-    in-process Rust batch (configs pickle)."""
+    in-process Rust batch (configs pickle). The defaults are the article's cold budget:
+    population 100 × 100 generations from a random start, no early stop.
+
+    ``warm_start``: a sweep of the same configuration (a :class:`~vtb.tid_sweep.SweepResult`
+    or the path of its journal). Its successful cases within :data:`BOUNDS` are the already
+    evaluated points the first population is chosen from (``initial`` of
+    :func:`vtb.moga.minimize`); they cost no run. ``stop_hv=(tol, window)``: stop once the
+    hypervolume (module docstring) moved by less than ``tol`` relative over ``window``
+    generations; ``n_gen`` stays the cap. The history (``result.moga.history``) always records
+    the hypervolume and the evaluations, whatever the stop.
+
+    ``checkpoint``: a file holding the optimiser's state after every generation; a run given an
+    existing one resumes after its last generation and ends with the same result as an
+    uninterrupted run (see :func:`vtb.moga.minimize`). It is tied to this problem — the
+    algorithm, budget, options, seed, warm-start points, ``stop_hv``, and hashes of the
+    configuration and of its uncontrolled metrics — and refused for another.
+    """
     if config.tids is None:
         config = config.copy()
         config.tids = tids_around(config)
@@ -133,11 +186,24 @@ def optimize(
     baseline = base_run.metrics()
     # Executor workers run one case at a time each.
     evaluate = TidObjectives(config, baseline, 1 if executor is not None else threads)
+    initial = None
+    if warm_start is not None:
+        X0, F0, G0, metrics = warm_start_points(warm_start, config, baseline)
+        evaluate.cache.update(zip(map(tuple, X0), metrics))
+        initial = (X0, F0, G0)
     problem = moga.Problem(
         lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
         evaluate=evaluate, log_scale=np.array(LOG_SCALE),
     )
-    res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor, **options)
+    identity = {"vtb.optimize": {  # what the evaluations depend on, hashed
+        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
+        "baseline": hashlib.sha256(json.dumps(baseline, sort_keys=True).encode()).hexdigest(),
+    }}
+    res = moga.minimize(
+        problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor,
+        hv_ref=(baseline["rail_acc_max"], baseline["slab_acc_max"]), initial=initial, stop_hv=stop_hv,
+        checkpoint=checkpoint, checkpoint_identity=identity, **options,
+    )
     X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
     missing = [x for x in X if tuple(x) not in evaluate.cache]
     if missing:

@@ -4,16 +4,24 @@
 with the dampers of ``config.tids`` (default :func:`vtb.tids_around`), in parallel in Rust or
 through any :class:`concurrent.futures.Executor`. With ``out=`` finished cases are appended to a
 CSV journal chunk by chunk as they complete; re-running with the same path skips them.
+
+The journal: line 1 is its stamp, ``# vtb sweep journal {"config": {...}, "format": 1}`` (the
+swept configuration as JSON), line 2 the CSV header :data:`JOURNAL_COLUMNS`, then one row per
+finished run keyed by its parameters (b_t, k_t, c_t; ``nan`` for the uncontrolled baseline),
+not by a case number, so that a changed grid reuses every row it shares. See :func:`sweep`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
+import io
 import json
 import math
 import numbers
 import os
+import socket
 from concurrent.futures import Executor, as_completed
 from pathlib import Path
 from typing import Optional, Sequence, Union
@@ -21,7 +29,8 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from .config import Config
-from .errors import VtbError, config_error
+from .errors import ConfigError, VtbError, config_error
+from .moga import write_atomically
 from .presets import tids_around
 from .simulate import simulate_batch
 
@@ -38,6 +47,11 @@ METRICS = (
     "contact_loss_events",
 )
 COLUMNS = ("case", "b_t", "k_t", "c_t") + METRICS + ("error",)
+#: The columns of a sweep journal: those of a result but the case number (rows are keyed by
+#: their parameters).
+JOURNAL_COLUMNS = COLUMNS[1:]
+JOURNAL_FORMAT = 1
+_STAMP = "# vtb sweep journal "
 
 
 @dataclasses.dataclass
@@ -78,7 +92,8 @@ class SweepResult:
         return pd.DataFrame(self.columns)
 
     def to_csv(self, path) -> None:
-        _write_rows(Path(path), [dict(zip(COLUMNS, row)) for row in zip(*(self.columns[c] for c in COLUMNS))], header=True, mode="w")
+        """CSV export of the columns (with the case numbers; not a journal)."""
+        Path(path).write_text(_csv_text([dict(zip(COLUMNS, row)) for row in zip(*(self.columns[c] for c in COLUMNS))], COLUMNS, header=True))
 
     def to_parquet(self, path) -> None:
         """Parquet export (needs pyarrow)."""
@@ -169,13 +184,30 @@ def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
     return rows
 
 
-def _write_rows(path: Path, rows: list, header: bool, mode: str = "a") -> None:
-    with open(path, mode, newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS)
-        if header:
-            w.writeheader()
-        for r in rows:
-            w.writerow({k: (repr(float(r[k])) if k not in ("case", "error") else r[k]) for k in COLUMNS})
+def config_stamp(config: Config) -> str:
+    """The configuration as canonical JSON: what a journal is stamped with and what a warm start
+    and a checkpoint of :func:`vtb.optimize` are checked against."""
+    return json.dumps(config.to_dict(), sort_keys=True)
+
+
+def _key(b: float, k: float, c: float):
+    """A run's journal key: its parameters, ``None`` for the baseline (no dampers)."""
+    return None if math.isnan(b) else (b, k, c)
+
+
+def _csv_text(rows: list, columns: tuple, header: bool = False) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
+    if header:
+        w.writeheader()
+    for r in rows:
+        w.writerow({k: (r[k] if k in ("case", "error") else repr(float(r[k]))) for k in columns})
+    return buf.getvalue()
+
+
+def _append_rows(journal: Path, rows: list) -> None:
+    with open(journal, "a", newline="") as f:
+        f.write(_csv_text(rows, JOURNAL_COLUMNS))
         f.flush()
         os.fsync(f.fileno())
 
@@ -188,20 +220,126 @@ def _drop_partial_line(path: Path) -> None:
             f.truncate(data.rfind(b"\n") + 1)
 
 
-def _read_rows(path: Path) -> list:
-    rows = []
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        if not set(COLUMNS) <= set(reader.fieldnames or ()):
-            raise config_error("out", str(path), f"is not a vtb sweep journal (columns {reader.fieldnames})")
-        for r in reader:
-            if r.get("error") is None:  # a line cut short by a kill
-                continue
+def _parse_journal(path: Path, field: str):
+    """The stamp's configuration (``None`` for an empty file) and the journal's rows by key.
+
+    Of several rows with one key the last successful one wins, or the last one when all failed.
+    A last line without its newline (a write cut short) is ignored; anything else malformed
+    raises a :class:`ConfigError` naming ``field`` and the line number.
+    """
+    data = path.read_bytes()
+    try:
+        lines = data[: data.rfind(b"\n") + 1].decode("utf-8").split("\n")[:-1]
+    except UnicodeDecodeError as e:
+        raise config_error(field, str(path), f"is not a vtb sweep journal (not UTF-8 text: {e})") from None
+    if not lines:
+        return None, {}
+
+    def bad(line: int, reason: str) -> ConfigError:
+        return config_error(field, str(path), f"line {line}: {reason}")
+
+    if not lines[0].startswith(_STAMP):
+        raise bad(1, f"not a vtb sweep journal (its first line must be the stamp {_STAMP.strip()!r} + JSON); choose another path")
+    try:
+        stamp = json.loads(lines[0][len(_STAMP):])
+        fmt, config = stamp["format"], Config.from_dict(stamp["config"])
+    except (ValueError, KeyError, TypeError) as e:  # ConfigError is a ValueError
+        raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
+    if fmt != JOURNAL_FORMAT:
+        raise bad(1, f"journal format {fmt!r}; this vtb reads format {JOURNAL_FORMAT}")
+    if next(csv.reader(lines[1:2]), None) != list(JOURNAL_COLUMNS):
+        raise bad(2, f"the header must be {','.join(JOURNAL_COLUMNS)}")
+    rows = {}
+    for number, fields in enumerate(csv.reader(lines[2:]), start=3):
+        if len(fields) != len(JOURNAL_COLUMNS):
+            raise bad(number, f"{len(fields)} fields, expected {len(JOURNAL_COLUMNS)}")
+        row = {"error": fields[-1]}
+        for name, text in zip(JOURNAL_COLUMNS[:-1], fields):
             try:
-                rows.append({k: (int(r[k]) if k == "case" else r[k] if k == "error" else float(r[k])) for k in COLUMNS})
-            except (TypeError, ValueError):
-                continue
+                row[name] = float(text)
+            except ValueError:
+                raise bad(number, f"{name} = {text!r} is not a number") from None
+        params = [row["b_t"], row["k_t"], row["c_t"]]
+        if not (all(math.isnan(v) for v in params) or all(math.isfinite(v) for v in params)):
+            raise bad(number, f"(b_t, k_t, c_t) = {params} must be three numbers, or three nan for the baseline")
+        key = _key(*params)
+        if not row["error"] or key not in rows or rows[key]["error"]:
+            rows[key] = row
+    return config, rows
+
+
+@contextlib.contextmanager
+def _journal_lock(journal: Path):
+    """Holds ``<journal>.lock`` for a whole sweep. The lock is an exclusive ``fcntl.flock`` on
+    that file, which the kernel releases when its process dies: the file a killed sweep leaves
+    behind is then free again, so stale locks need no clean-up. The holder writes its pid and
+    host into the file for the message of a sweep refused meanwhile."""
+    import fcntl  # POSIX only
+
+    path = journal.with_name(journal.name + ".lock")
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 200, 0).decode(errors="replace").strip()
+            os.close(fd)
+            raise config_error("out", str(journal), f"is in use by another sweep ({holder or 'pid not yet written'}; lock file {path})") from None
+        # the holder may have removed the file between our open and our lock: lock the new one
+        try:
+            if os.stat(path).st_ino == os.fstat(fd).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
+        yield
+    finally:
+        path.unlink(missing_ok=True)  # still locked: nobody can take the unlinked file unnoticed
+        os.close(fd)
+
+
+def _open_journal(journal: Path, config: Config) -> dict:
+    """The rows of the journal of ``config`` by key, creating the journal if absent or empty;
+    refuses one of another configuration. Call it with the lock held."""
+    if journal.exists():
+        _drop_partial_line(journal)
+        stamped, rows = _parse_journal(journal, "out")
+    else:
+        stamped, rows = None, {}
+    stamp = config_stamp(config)
+    if stamped is None:
+        first = _STAMP + json.dumps({"format": JOURNAL_FORMAT, "config": json.loads(stamp)}, sort_keys=True) + "\n"
+        write_atomically(journal, lambda f: f.write((first + _csv_text([], JOURNAL_COLUMNS, header=True)).encode()))
+        return {}
+    if config_stamp(stamped) != stamp:
+        raise config_error("out", str(journal), "line 1: holds a sweep of another configuration; choose another path")
     return rows
+
+
+def read_journal(path: Union[str, Path], field: str = "path") -> SweepResult:
+    """A sweep journal as a :class:`SweepResult`, without running anything: the configuration
+    of its stamp and one row per key (the rule of :func:`sweep` for repeated keys), the baseline
+    as case 0 and the TID cases numbered in their order in the file. A malformed journal raises
+    a :class:`ConfigError` naming ``field`` and the line."""
+    path = Path(path)
+    if not path.is_file():
+        raise config_error(field, str(path), "no such sweep journal")
+    config, rows = _parse_journal(path, field)
+    if config is None:
+        raise config_error(field, str(path), "is an empty file, not a sweep journal")
+    ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the baseline first (stable)
+    start = 0 if ordered and ordered[0][0] is None else 1
+    return _result([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config)
+
+
+def _result(rows: list, config: Config) -> SweepResult:
+    rows = sorted(rows, key=lambda r: r["case"])
+    columns = {k: np.array([r[k] for r in rows], dtype=str if k == "error" else float) for k in COLUMNS}
+    columns["case"] = columns["case"].astype(int)
+    return SweepResult(columns=columns, config=config)
 
 
 def sweep(
@@ -221,11 +359,27 @@ def sweep(
     ``config.tids`` gives the dampers' count and positions (default: :func:`vtb.tids_around`).
     In-process (default) the runs go to the Rust batch call on ``threads`` cores (all when
     None); with ``executor`` (a process pool, or Dask's ``client.get_executor()``) chunks of
-    ``chunk`` cases are submitted to it and run there. ``out``: a CSV journal (``.parquet``:
-    the journal is ``out + ".csv"`` and the Parquet table is written at the end); finished
-    cases are appended as they complete and a re-run with the same path recomputes none of
-    them. A failing case (e.g. contact non-convergence) is recorded with its reason and the
-    sweep goes on. ``progress``: a tqdm bar (True), none (False) or a callable ``f(done, total)``.
+    ``chunk`` cases are submitted to it and run there. A failing case (e.g. contact
+    non-convergence) is recorded with its reason and the sweep goes on. ``progress``: a tqdm bar
+    (True), none (False) or a callable ``f(done, total)``.
+
+    ``out``: a CSV journal (``.parquet``: the journal is ``out + ".csv"`` and the Parquet table
+    is written at the end). Finished runs are appended to it as they complete, and a re-run
+    with the same path runs only what the journal lacks:
+
+    * the journal carries its configuration in its first line (the stamp, see the module
+      docstring); a journal of another configuration, or a file that is not a journal, is
+      refused;
+    * rows are keyed by (b_t, k_t, c_t) (the baseline by none of them), so a grid extended by
+      new values runs only the new cases; rows outside the grid stay in the file, unused;
+    * failed cases (non-empty ``error``) are retried; of several rows with one key the last
+      successful one counts, or the last one when all failed;
+    * the sweep holds ``<journal>.lock`` (an exclusive ``flock``) from start to end, so a
+      second sweep on the same journal is refused with the holder's pid; the kernel drops the
+      lock of a process that dies, so a lock file left by a killed sweep does not block;
+    * a last line cut short by a kill is dropped; any other malformed line (a missing or
+      unparsable stamp, a wrong header, a wrong number of fields, a value that is not a number)
+      raises a :class:`ConfigError` naming ``out`` and the line number.
     """
     for name, vals, low in (("b_t", b_t, 0.0), ("k_t", k_t, 0.0), ("c_t", c_t, None)):
         if len(vals) == 0:
@@ -243,79 +397,65 @@ def sweep(
 
     for _, b, k, c in cases[1:2]:
         _validate_python_side(case_config(config, b, k, c))
-    done_rows: list = []
     journal = None
     if out is not None:
         out = Path(out)
         journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
         journal.parent.mkdir(parents=True, exist_ok=True)
-        # The journal belongs to one configuration: its sidecar records it.
-        sidecar = journal.with_name(journal.name + ".config.json")
-        stamp = json.dumps(config.to_dict(), sort_keys=True)
-        if journal.exists() and journal.stat().st_size > 0:
-            if sidecar.exists() and sidecar.read_text() != stamp:
-                raise config_error("out", str(journal), "holds a sweep of another configuration (see its .config.json); choose another path")
-            _drop_partial_line(journal)
-        if journal.exists() and journal.stat().st_size > 0:
-            done_rows = _read_rows(journal)
-        else:
-            _write_rows(journal, [], header=True, mode="w")
-        sidecar.write_text(stamp)
-    # A journal row counts only if it is this grid's case with these parameters.
-    key = {c[0]: c[1:] for c in cases}
-    same = lambda r: r["case"] in key and all((math.isnan(a) and math.isnan(b)) or a == b for a, b in zip(key[r["case"]], (r["b_t"], r["k_t"], r["c_t"])))
-    done_rows = [r for r in done_rows if same(r)]
-    finished = {r["case"] for r in done_rows}
-    todo = [c for c in cases if c[0] not in finished]
-    total, done = len(cases), len(cases) - len(todo)
-    bar, report = None, None
-    if progress is True:
-        from tqdm.auto import tqdm
+    with _journal_lock(journal) if journal is not None else contextlib.nullcontext():
+        known = _open_journal(journal, config) if journal is not None else {}
+        rows = []
+        for case, b, k, c in cases:
+            row = known.get(_key(b, k, c))
+            if row is not None and not row["error"]:
+                rows.append(dict(row, case=case))
+        reused = {r["case"] for r in rows}
+        todo = [c for c in cases if c[0] not in reused]
+        total, done = len(cases), len(rows)
+        bar, report = None, None
+        if progress is True:
+            from tqdm.auto import tqdm
 
-        bar = tqdm(total=total, initial=done, desc="vtb sweep", unit="run")
-    elif callable(progress):
-        report = progress
-    n_workers = threads or os.cpu_count() or 1
-    size = chunk or (4 * n_workers if executor is None else 8)
-    chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
-    rows = list(done_rows)
+            bar = tqdm(total=total, initial=done, desc="vtb sweep", unit="run")
+        elif callable(progress):
+            report = progress
+        n_workers = threads or os.cpu_count() or 1
+        size = chunk or (4 * n_workers if executor is None else 8)
+        chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
 
-    def finish(new_rows):
-        nonlocal done
-        rows.extend(new_rows)
-        if journal is not None:
-            _write_rows(journal, new_rows, header=False)
-        done += len(new_rows)
-        if bar is not None:
-            bar.update(len(new_rows))
-        if report is not None:
-            report(done, total)
+        def finish(new_rows):
+            nonlocal done
+            rows.extend(new_rows)
+            if journal is not None:
+                _append_rows(journal, new_rows)
+            done += len(new_rows)
+            if bar is not None:
+                bar.update(len(new_rows))
+            if report is not None:
+                report(done, total)
 
-    try:
-        if executor is None:
-            for ch in chunks:
-                finish(_run_chunk(config, ch, threads))
-        else:
-            futures = {executor.submit(_run_chunk, config, ch, 1): ch for ch in chunks}
-            try:
-                for fut in as_completed(futures):
-                    try:
-                        new = fut.result()
-                    except Exception as e:  # a worker lost: record its cases, carry on
-                        reason = " ".join(f"worker failed: {type(e).__name__}: {e}".split())
-                        new = [dict({m: math.nan for m in METRICS}, case=c, b_t=b, k_t=k, c_t=cc, error=reason) for c, b, k, cc in futures[fut]]
-                    finish(new)
-            finally:
-                for fut in futures:
-                    fut.cancel()
-    finally:
-        if bar is not None:
-            bar.close()
-    rows.sort(key=lambda r: r["case"])
-    columns = {k: np.array([r[k] for r in rows], dtype=str if k == "error" else float) for k in COLUMNS}
-    columns["case"] = columns["case"].astype(int)
-    result = SweepResult(columns=columns, config=config)
-    if out is not None and Path(out).suffix == ".parquet":
+        try:
+            if executor is None:
+                for ch in chunks:
+                    finish(_run_chunk(config, ch, threads))
+            else:
+                futures = {executor.submit(_run_chunk, config, ch, 1): ch for ch in chunks}
+                try:
+                    for fut in as_completed(futures):
+                        try:
+                            new = fut.result()
+                        except Exception as e:  # a worker lost: record its cases, carry on
+                            reason = " ".join(f"worker failed: {type(e).__name__}: {e}".split())
+                            new = [dict({m: math.nan for m in METRICS}, case=c, b_t=b, k_t=k, c_t=cc, error=reason) for c, b, k, cc in futures[fut]]
+                        finish(new)
+                finally:
+                    for fut in futures:
+                        fut.cancel()
+        finally:
+            if bar is not None:
+                bar.close()
+    result = _result(rows, config)
+    if out is not None and out.suffix == ".parquet":
         result.to_parquet(out)
     return result
 
