@@ -156,7 +156,7 @@ def cmd_reproduce(args) -> int:
     from .reproduce import run
 
     t0 = time.perf_counter()
-    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen)
+    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen, optimiser=args.optimiser)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -212,6 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, default=0, help="optimiser seed")
     r.add_argument("--pop", type=int, help="optimiser population (default: 100; --quick 8)")
     r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
+    r.add_argument("--optimiser", choices=("warm", "cold", "both"), default="warm", help="warm: seeded from the sweep with the hypervolume stop (default); cold: the article's budget from a random start; both: the two, compared")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.set_defaults(func=cmd_reproduce)
     return p

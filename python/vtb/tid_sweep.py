@@ -420,7 +420,9 @@ def sweep(
         elif callable(progress):
             report = progress
         n_workers = threads or os.cpu_count() or 1
-        size = chunk or (4 * n_workers if executor is None else 8)
+        # In-process chunks of 16 per worker: lockstep groups of four on every core, and one
+        # model built per chunk.
+        size = chunk or (16 * n_workers if executor is None else 8)
         chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
 
         def finish(new_rows):

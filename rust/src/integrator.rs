@@ -21,6 +21,11 @@
 //! right-hand side and one backward substitution of the combined right-hand side finishes the
 //! step; short ones use cached columns of A⁻¹.
 //!
+//! A stepper advances W jobs of one model in lockstep (lanes; W = 1 for a single run): the
+//! factor of A, the ports and the dampers' positions are shared, each lane has its own state,
+//! forces and damper parameters, stored interleaved, and does exactly the operations of a
+//! single run (docs/batches.md).
+//!
 //! Tuned inerter dampers (`Attachment`) are not factorised with A: a damper's point shape
 //! vectors would fill the sparse factor. Its internal node is eliminated within the step
 //! (spring–dashpot α_r = Δt·c + Δt²k/2 in series with the inerter α_s = 2b), leaving the rank-one
