@@ -145,7 +145,7 @@ def test_moving_load_mode_with_full_stack():
     assert r.vehicle_disp.shape[1] == 0 and r.metrics()["rail_disp_max"] > 0
 
 
-def test_ctrl_c_interrupts_a_batch():
+def test_ctrl_c_interrupts_a_batch(default_sigint):
     """SIGINT during a batch raises KeyboardInterrupt promptly (the GIL is released and the
     worker polls a cancel flag)."""
     cfgs = [vtb.paper_config() for _ in range(8)]

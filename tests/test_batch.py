@@ -81,7 +81,7 @@ def test_lanes_must_be_a_compiled_width(group):
         assert e.value.field == "lanes"
 
 
-def test_ctrl_c_stops_a_long_batch_within_a_second():
+def test_ctrl_c_stops_a_long_batch_within_a_second(default_sigint):
     """SIGINT 0.4 s into a batch of converged-preset jobs (the slowest model: lockstep groups
     of four, ≈ 70 000 steps each) raises KeyboardInterrupt within 1 s of the signal."""
     base = vtb.paper_config(model="converged")
