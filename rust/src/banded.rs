@@ -144,7 +144,13 @@ impl BlockPair {
         let nb = self.vals.len() / (6 * s * s);
         assert!(x.len() == nb * s * W && ya.len() == x.len() && yb.len() == x.len());
         crate::wide!(<W> (vals: &[f64] = &self.vals, s: usize = s, nb: usize = nb, x: &[f64] = x, ya: &mut [f64] = ya, yb: &mut [f64] = yb) {
+            // Two partial sums per product (even and odd columns) halve the latency chains;
+            // only the block's s·W entries of each are used (and cleared).
+            let mut acc = [[[0.0; 16 * 8]; 2]; 2];
             for blk in 0..nb {
+                for a in acc.iter_mut().flatten() {
+                    a[..s * W].fill(0.0);
+                }
                 let lo = if blk == 0 { s } else { 0 };
                 let hi = if blk + 1 == nb { 2 * s } else { 3 * s };
                 let row = &vals[blk * 6 * s * s..(blk + 1) * 6 * s * s];
@@ -152,8 +158,6 @@ impl BlockPair {
                     &mut ya[blk * s * W..(blk + 1) * s * W],
                     &mut yb[blk * s * W..(blk + 1) * s * W],
                 );
-                // Two partial sums per product (even and odd columns) halve the latency chains.
-                let mut acc = [[[0.0; 16 * 8]; 2]; 2];
                 for k in lo..hi {
                     let xk = &x[(blk * s + k - s) * W..(blk * s + k - s + 1) * W];
                     let cols = &row[2 * k * s..(2 * k + 2) * s];
@@ -275,12 +279,13 @@ impl BlockLdlt {
             // Forward: z_b = x_b − L_b·z_{b−1} (kept in zp), x_b = S_b⁻¹·z_b.
             let mut zp = [0.0; 16 * 8];
             let mut w = [0.0; 16 * 8];
+            let mut z2 = [0.0; 16 * 8];
             for b in first..nb {
                 let xb = &mut x[b * s * W..(b + 1) * s * W];
                 if b > first {
                     // Two partial sums (even and odd k) halve the serial chain.
                     let lb = &l[b * ss..(b + 1) * ss];
-                    let mut z2 = [0.0; 16 * 8];
+                    z2[..s * W].fill(0.0);
                     for k in 0..s {
                         let acc = if k & 1 == 0 { &mut *xb } else { &mut z2[..s * W] };
                         for i in 0..s {

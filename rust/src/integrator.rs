@@ -583,27 +583,14 @@ impl<const W: usize> Newmark<W> {
             lowers.push(lo);
             att.node.push(ns + i);
         }
-        att.upper = ShapeSet::new(&uppers, 1);
-        att.lower = ShapeSet::new(&lowers, 1);
-        for v in [
-            &mut att.t_free,
-            &mut att.wz,
-            &mut att.pu,
-            &mut att.pl,
-            &mut att.wu,
-            &mut att.wl,
-        ] {
-            *v = vec![0.0; nt];
-        }
-        att.wty = vec![0.0; nt * nt];
-        for (j, yj) in y.iter().enumerate() {
-            att.w_dots::<1>(yj);
-            for i in 0..nt {
-                att.wty[i * nt + j] = att.wz[i];
-            }
-        }
+        // WᵀY: (N_upper,i − N_lower,i)·y_j.
+        att.wty = (0..nt * nt)
+            .map(|q| {
+                let (i, j) = (q / nt, q % nt);
+                uppers[i].dot(&y[j]) - lowers[i].dot(&y[j])
+            })
+            .collect();
         att.yt = (0..ns * nt).map(|q| y[q % nt][q / nt]).collect();
-        // From here on the dampers work on W lanes.
         att.upper = ShapeSet::new(&uppers, W);
         att.lower = ShapeSet::new(&lowers, W);
         for v in [
@@ -1215,29 +1202,12 @@ mod tests {
             damping: 0.5,
             inertance: 0.2,
         };
-        // Full matrices with the node as DOF n.
-        let full = |a: &CsrMatrix, s: &Shape, w: f64| {
-            let mut asm = Assembler::new(n + 1);
-            for i in 0..n {
-                for p in a.row_ptr[i]..a.row_ptr[i + 1] {
-                    asm.add(i, a.col_idx[p], a.values[p]);
-                }
-            }
-            let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
-            dofs.push(n);
-            let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
-            v.push(1.0);
-            let block: Vec<f64> = v
-                .iter()
-                .flat_map(|p| v.iter().map(move |q| p * q))
-                .collect();
-            asm.add_block(&dofs, &block, w);
-            asm.finish()
-        };
-        let (mf, kf, cf) = (
-            full(&m0, &att.lower, att.inertance),
-            full(&k0, &att.upper, att.stiffness),
-            full(&c0, &att.upper, att.damping),
+        // Full matrices with the node as DOF n: the damper assembled as a finite element.
+        let [mf, kf, cf] = crate::structure::with_dampers(
+            [&m0, &k0, &c0],
+            n + 1,
+            std::slice::from_ref(&att),
+            &[DamperParams::from(&att)],
         );
         let port = Shape {
             start: 0,

@@ -233,7 +233,7 @@ impl Structure {
 /// M, K, C of `base` (the layers' DOFs) plus the dampers with the given parameters: each
 /// element w·(e_node − N)(e_node − N)ᵀ (inerter on the lower point, spring and dashpot on
 /// the upper one), in matrices of dimension `n`.
-fn with_dampers(
+pub(crate) fn with_dampers(
     base: [&CsrMatrix; 3],
     n: usize,
     tids: &[Attachment],
