@@ -241,7 +241,7 @@ class Config(StrictFields):
             else:
                 return None
             w = 2.0 * math.pi * self.speed / lam
-        except (TypeError, ValueError, ZeroDivisionError):
+        except (AttributeError, TypeError, ValueError, ZeroDivisionError):
             return None
         return w if math.isfinite(w) and w > 0 else None
 

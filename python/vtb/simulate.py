@@ -11,6 +11,7 @@ import numpy as np
 
 from . import _core
 from .config import Config, check_types
+from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
@@ -32,18 +33,20 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
     text = cfg.to_core_json()
+    if not isinstance(cfg.irregularity, Irregularity):
+        raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")
-    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(cfg.solver.dt))
+    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)))
     return text, irregularity_profile(cfg)
 
 
 def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
     """The sampled irregularity (x0, dx, values in m) a configuration runs on. A structure
     length the core will refuse gets no profile (the core then names the length)."""
-    L = _real(cfg.structure.length)
+    L = _real(getattr(cfg.structure, "length", None))
     if L is None or L <= 0:
         return 0.0, 1.0, np.zeros(0)
-    budget = _real(cfg.solver.memory_budget)
+    budget = _real(getattr(cfg.solver, "memory_budget", None))
     return cfg.irregularity.profile(-_PROFILE_MARGIN, L + _PROFILE_MARGIN, memory_budget=budget)
 
 
@@ -193,7 +196,7 @@ def simulate_batch(
         try:
             if not isinstance(cfg, Config):
                 raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
-            key = (repr(cfg.irregularity), repr(cfg.structure.length), repr(cfg.solver.memory_budget))
+            key = (repr(cfg.irregularity), repr(getattr(cfg.structure, "length", None)), repr(getattr(cfg.solver, "memory_budget", None)))
             if key not in keys:
                 text, profile = _prepare(cfg)
                 keys[key] = len(profiles)
