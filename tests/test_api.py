@@ -76,17 +76,17 @@ def test_toml_round_trip(tmp_path):
     cfg.to_toml(path)
     back = vtb.Config.from_toml(path)
     assert back == cfg
-    assert vtb.Config.from_toml(path.read_text()) == cfg
+    assert vtb.Config.from_toml_text(path.read_text()) == cfg
 
 
 def test_toml_errors_name_the_field():
     text = vtb.paper_config().to_toml().replace("speed = 80.0", "sped = 80.0")
     with pytest.raises(vtb.ConfigError) as e:
-        vtb.Config.from_toml(text)
+        vtb.Config.from_toml_text(text)
     assert e.value.field == "sped"
     text = vtb.paper_config().to_toml().replace("m_c = 44000.0", 'm_c = "heavy"')
     with pytest.raises(vtb.ConfigError) as e:
-        vtb.Config.from_toml(text)
+        vtb.Config.from_toml_text(text)
     assert e.value.field == "vehicles[0].m_c"
 
 

@@ -76,7 +76,7 @@ def test_cli_lists_prints_and_runs_examples(tmp_path, capsys):
     assert all(name in listed for name in NAMES)
     assert cli.main(["examples", "two_span_sato"]) == 0
     text = capsys.readouterr().out
-    assert _close(vtb.Config.from_toml(text).to_dict(), vtb.example_config("two_span_sato").to_dict())
+    assert _close(vtb.Config.from_toml_text(text).to_dict(), vtb.example_config("two_span_sato").to_dict())
     assert cli.main(["examples", "nope"]) == 2
     assert "example" in capsys.readouterr().err
     out = tmp_path / "run"

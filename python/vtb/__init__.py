@@ -28,7 +28,7 @@ from .config import (
 )
 from .errors import ConfigError, ConvergenceError, SolverError, VtbError
 from .fesea import FeSeaReport, fesea_report
-from .irregularity import Irregularity
+from .irregularity import Irregularity, IrregularityWarning
 from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
 from .simulate import Result, assembled_matrices, irregularity_profile, simulate, simulate_batch
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
@@ -37,7 +37,7 @@ from .optimize import OptimizationResult, optimize
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
-    "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "irregularity",
+    "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "IrregularityWarning", "irregularity",
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",

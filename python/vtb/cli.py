@@ -4,11 +4,73 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-from .errors import VtbError
+from .errors import VtbError, config_error
+
+#: What each command writes into its ``--out`` directory (refused when present, unless
+#: ``--force``).
+SIMULATE_FILES = ("result.npz", "metrics.json", "config.toml", "histories.png")
+REPRODUCE_FILES = ("report.md",)
+
+
+def _writable_dir(path: Path, option: str) -> None:
+    """Creates ``path`` (a directory) if needed and proves it writable, or raises a
+    :class:`~vtb.errors.ConfigError` naming ``option``."""
+    if path.exists() and not path.is_dir():
+        raise config_error(option, str(path), "is a file, not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as e:
+        raise config_error(option, str(path), f"is not writable ({e.strerror or e})") from None
+
+
+def check_out_dir(path, option: str, results, force: bool, hint: str = "") -> None:
+    """An output directory must be writable and, unless ``force``, hold none of ``results``."""
+    path = Path(path)
+    _writable_dir(path, option)
+    clash = [f for f in results if (path / f).exists()]
+    if clash and not force:
+        raise config_error(option, str(path), f"holds the results of an earlier run ({', '.join(clash)}): pass --force to overwrite{hint}")
+
+
+def check_out_file(path, option: str, force: bool) -> None:
+    """An output file must not be a directory, its folder must be writable and, unless
+    ``force``, it must not exist."""
+    path = Path(path)
+    if path.is_dir():
+        raise config_error(option, str(path), "is a directory, not a file")
+    _writable_dir(path.parent if str(path.parent) else Path("."), option)
+    if path.exists() and not force:
+        raise config_error(option, str(path), "exists: pass --force to overwrite")
+
+
+def check_config_file(path) -> None:
+    """``--config`` names a readable file or a shipped example."""
+    if path is None:
+        return
+    from .presets import examples
+
+    p = Path(path)
+    if p.is_dir():
+        raise config_error("--config", path, "is a directory, not a TOML file")
+    if not p.is_file() and path not in examples():
+        raise config_error("--config", path, f"no such file, and no example of that name (vtb examples lists: {', '.join(examples())})")
+    if p.is_file() and not os.access(p, os.R_OK):
+        raise config_error("--config", path, "is not readable")
+
+
+def require_matplotlib(command: str) -> None:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise VtbError(f"{command} draws figures and needs matplotlib: pip install 'vtb[plot]'") from None
 
 
 def _load_config(path: str | None):
@@ -19,6 +81,7 @@ def _load_config(path: str | None):
         return paper_config()
     from .config import Config
 
+    check_config_file(path)
     if not Path(path).is_file() and path in examples():
         return example_config(path)
     return Config.from_toml(Path(path))
@@ -32,6 +95,8 @@ def _print_metrics(metrics: dict, out=None) -> None:
 
 
 def cmd_simulate(args) -> int:
+    if args.out:
+        check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
     cfg = _load_config(args.config)
     from .simulate import simulate
 
@@ -62,6 +127,7 @@ def cmd_validate(args) -> int:
 
     from .validation import REFERENCE, errors, run_study, write_report
 
+    check_out_file(args.out, "--out", args.force)
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         cases = run_study(progress=not args.no_progress, executor=pool)
     command = "vtb validate --out " + str(args.out)
@@ -91,6 +157,12 @@ def _tid_config(args):
 def cmd_sweep(args) -> int:
     from .tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
 
+    check_config_file(args.config)
+    if Path(args.out).is_dir():
+        raise config_error("--out", args.out, "is a directory, not a journal file")
+    _writable_dir(Path(args.out).parent, "--out")
+    if args.report:
+        check_out_file(args.report, "--report", args.force)
     cfg = _tid_config(args)
     t0 = time.perf_counter()
     res = sweep(
@@ -111,6 +183,13 @@ def cmd_sweep(args) -> int:
 def cmd_optimize(args) -> int:
     from .optimize import optimize
 
+    check_config_file(args.config)
+    if args.out:
+        check_out_file(args.out, "--out", args.force)
+    if args.checkpoint:
+        if Path(args.checkpoint).is_dir():
+            raise config_error("--checkpoint", args.checkpoint, "is a directory, not a file")
+        _writable_dir(Path(args.checkpoint).parent, "--checkpoint")
     cfg = _tid_config(args)
     res = optimize(
         cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads,
@@ -127,7 +206,6 @@ def cmd_optimize(args) -> int:
         import csv
 
         out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
         with open(out, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(list(res.pareto))
@@ -155,6 +233,8 @@ def cmd_examples(args) -> int:
 def cmd_reproduce(args) -> int:
     from .reproduce import run
 
+    require_matplotlib("vtb reproduce")
+    check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its sweep journal and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
     report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen, optimiser=args.optimiser)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
@@ -168,11 +248,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--config", help="TOML configuration, or a shipped example's name (vtb examples) (default: vtb.paper_config())")
     s.add_argument("--out", help="directory for result.npz, metrics.json, config.toml and a plot")
     s.add_argument("--no-plot", action="store_true", help="do not write histories.png")
+    s.add_argument("--force", action="store_true", help="overwrite the results of an earlier run in --out")
     s.set_defaults(func=cmd_simulate)
     v = sub.add_parser("validate", help="the convergence study: the article's case on every discretisation against a refined reference, as a Markdown page (about 15 minutes on two cores)")
     v.add_argument("--out", default="docs/validation.md", help="Markdown page to write (default: docs/validation.md)")
     v.add_argument("--workers", type=int, default=2, help="runs at a time (default: 2)")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
+    v.add_argument("--force", action="store_true", help="overwrite an existing --out page")
     v.set_defaults(func=cmd_validate)
 
     def tid_case(sp):
@@ -180,6 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
         sp.add_argument("--calibrated", action="store_true", help="the article's case with the irregularity calibrated to a_rm0 = 1005.6 m/s²")
         sp.add_argument("--threads", type=int, help="worker threads (default: all cores)")
         sp.add_argument("--no-progress", action="store_true", help="no progress bar")
+        sp.add_argument("--force", action="store_true", help="overwrite existing output files")
 
     w = sub.add_parser("sweep", help="the TID parameter sweep (default: the article's 1 840-case grid) with its analyses")
     tid_case(w)
@@ -214,6 +297,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
     r.add_argument("--optimiser", choices=("warm", "cold", "both"), default="warm", help="warm: seeded from the sweep with the hypervolume stop (default); cold: the article's budget from a random start; both: the two, compared")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
+    r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match)")
     r.set_defaults(func=cmd_reproduce)
     return p
 

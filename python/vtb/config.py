@@ -1,9 +1,12 @@
 """Run configuration as plain dataclasses.
 
-The classes mirror the JSON schema of the Rust core field for field (see
-``rust/src/config.rs``); :meth:`Config.to_core_json` serialises everything except the
-irregularity, which is generated here and passed to the core as a sampled profile.
-Configurations copy with :func:`dataclasses.replace`, pickle, and load from / save to TOML.
+The Rust core owns the configuration: its schema (:mod:`vtb.schema`) defines every field,
+type and default, the defaults here are read from it, ``tests/test_schema.py`` holds these
+classes to it, and the core alone validates the values (naming the field on error).
+:meth:`Config.to_core_json` serialises everything except the irregularity, which is
+generated here and passed to the core as a sampled profile. Configurations copy with
+:func:`dataclasses.replace`, pickle, and load from / save to TOML. Assigning an attribute a
+class does not have raises :class:`~vtb.errors.ConfigError` naming the known ones.
 
 Units are SI (m, s, kg, N, Pa); vertical displacements are positive downward.
 """
@@ -22,6 +25,8 @@ from typing import Any, Literal, Optional, Union
 
 from .errors import config_error
 from .irregularity import Irregularity
+from .schema import StrictFields
+from .schema import default as _default
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -30,7 +35,7 @@ else:  # pragma: no cover
 
 
 @dataclass
-class RayleighRatio:
+class RayleighRatio(StrictFields):
     """Rayleigh damping C = αM + βK giving damping ratio ``ratio`` at ``f1`` and ``f2`` (Hz)."""
 
     ratio: float
@@ -39,7 +44,7 @@ class RayleighRatio:
 
 
 @dataclass
-class RayleighCoefficients:
+class RayleighCoefficients(StrictFields):
     """Rayleigh damping with explicit α (1/s) and β (s)."""
 
     alpha: float
@@ -50,7 +55,7 @@ Damping = Union[RayleighRatio, RayleighCoefficients]
 
 
 @dataclass
-class Layer:
+class Layer(StrictFields):
     """A beam layer (rail, slab, base, girder …): Euler–Bernoulli, or Timoshenko when
     ``shear_modulus`` and ``shear_coefficient`` are given."""
 
@@ -61,19 +66,19 @@ class Layer:
     inertia: float  #: I (m⁴)
     modes: int  #: sine modes of the modal basis (4 boundary functions come on top)
     damping: Damping
-    local_modes: int = 0  #: extra sine modes treated as local (FE–SEA) modes by the hybrid method
+    local_modes: int = _default("LayerConfig", "local_modes")  #: extra sine modes treated as local (FE–SEA) modes by the hybrid method
     #: shear modulus G (Pa); with ``shear_coefficient`` the layer is a Timoshenko beam (shear
     #: deformation and rotary inertia ρI), finite-element method only
-    shear_modulus: Optional[float] = None
-    shear_coefficient: Optional[float] = None  #: shear coefficient κ (−); ≈ 0.4 for a rail in vertical bending
+    shear_modulus: Optional[float] = _default("LayerConfig", "shear_modulus")
+    shear_coefficient: Optional[float] = _default("LayerConfig", "shear_coefficient")  #: shear coefficient κ (−); ≈ 0.4 for a rail in vertical bending
     #: longest finite element (m) of this layer; its nodes then fall on every discrete coupling
     #: point of the layer (fasteners, piers, dampers). ``None``: ``discretisation.fem_elements``
     #: equal elements, wherever the couplings fall
-    element_length: Optional[float] = None
+    element_length: Optional[float] = _default("LayerConfig", "element_length")
 
 
 @dataclass
-class Coupling:
+class Coupling(StrictFields):
     """Spring–dashpot connection of layer ``upper`` to layer ``lower`` (or ``"ground"``).
 
     ``kind="discrete"``: point springs at ``positions`` (stiffness N/m, damping N·s/m each);
@@ -84,8 +89,8 @@ class Coupling:
     lower: str
     kind: Literal["discrete", "continuous"]
     stiffness: float
-    damping: float = 0.0
-    positions: list = field(default_factory=list)
+    damping: float = _default("CouplingConfig", "damping")
+    positions: list = _default("CouplingConfig", "positions")
 
     @classmethod
     def grid(cls, upper: str, lower: str, stiffness: float, damping: float, spacing: float, length: float, first: float = 0.0) -> "Coupling":
@@ -95,39 +100,39 @@ class Coupling:
 
 
 @dataclass
-class Structure:
+class Structure(StrictFields):
     length: float  #: common length L of all layers (m)
     layers: list  #: list[Layer], top (wheels run on it) to bottom
-    couplings: list = field(default_factory=list)  #: list[Coupling]
+    couplings: list = _default("StructureConfig", "couplings")  #: list[Coupling]
 
 
 @dataclass
-class Discretisation:
+class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
     FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements)."""
 
-    method: Literal["modal", "hybrid", "fem"] = "modal"
-    fem_elements: int = 251
+    method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
+    fem_elements: int = _default("DiscretisationConfig", "fem_elements")
     #: FE–SEA representative excitation frequency ω_r (rad/s). ``None``: the geometric centre
     #: 2π·v/sqrt(λ_min·λ_max) of the irregularity's excitation band (a spectrum's band, or the
     #: wavelength of a corrugation or dip), else the geometric centre of the local modes'
     #: frequency range (docs/fesea.md).
-    omega_r: Optional[float] = None
+    omega_r: Optional[float] = _default("DiscretisationConfig", "omega_r")
     #: FE–SEA global–local coupling: ``"full"`` (mass, bending and rail springs; default) or
     #: ``"mass"`` (the article's mass-only reading).
-    fesea_coupling: Literal["full", "mass"] = "full"
+    fesea_coupling: Literal["full", "mass"] = _default("DiscretisationConfig", "fesea_coupling")
     #: Hybrid: add the local modes' static deflection under the rail loads to the rail's
     #: displacement outputs (docs/fesea.md). ``False`` follows model.md §6 literally.
-    local_deflection: bool = True
+    local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
     #: finite-element rails: each wheel also sees the static deflection of the rail element under
     #: it with the element's nodes fixed (in series with the contact), which the element's
     #: interpolation misses; keeps the static wheel–rail stiffness independent of the wheel's
     #: position in its element
-    element_flexibility: bool = True
+    element_flexibility: bool = _default("DiscretisationConfig", "element_flexibility")
 
 
 @dataclass
-class Vehicle:
+class Vehicle(StrictFields):
     """Zhai's 10-DOF car. Secondary suspension per bogie, primary per wheelset (both sides
     lumped). The modelled top layer is one of ``rails`` identical rails, so it carries
     1/``rails`` of every axle load."""
@@ -145,8 +150,8 @@ class Vehicle:
     l_t: float  #: half wheelbase (m)
     wheel_radius: float  #: (m), sets G = 4.57·R^−0.149·1e−8 m/N^(2/3)
     x_front: float  #: position of the leading wheelset at t = 0 (m)
-    contact_constant: Optional[float] = None  #: overrides the Hertz constant G
-    rails: int = 2
+    contact_constant: Optional[float] = _default("VehicleConfig", "contact_constant")  #: overrides the Hertz constant G
+    rails: int = _default("VehicleConfig", "rails")  #: identical rails sharing each axle load; the modelled one carries 1/rails
 
     @property
     def length(self) -> float:
@@ -155,32 +160,36 @@ class Vehicle:
 
 
 @dataclass
-class MovingForce:
+class MovingForce(StrictFields):
     """A constant force moving at the common speed (moving-load mode)."""
 
     magnitude: float  #: N, positive downward
     x0: float  #: position at t = 0 (m)
-    layer: Optional[str] = None  #: top layer when None
+    layer: Optional[str] = _default("MovingForceConfig", "layer")  #: top layer when None
 
 
 @dataclass
-class Solver:
-    dt: float = 5e-5  #: Newmark time step (s)
-    t_end: Optional[float] = None  #: end time (s); None: leading wheel reaches L − end_margin
-    end_margin: float = 1.0  #: (m)
-    gravity: float = 9.81  #: (m/s²)
-    contact_tol: float = 1e-10  #: |P − h(δ)| ≤ tol·(static wheel load) per wheel
-    contact_max_iter: int = 50
-    initial_state: Literal["static", "rest"] = "static"
+class Solver(StrictFields):
+    dt: float = _default("SolverConfig", "dt")  #: Newmark time step (s)
+    #: end time (s), a whole number of steps; None: the step nearest to the leading wheel
+    #: reaching L − end_margin
+    t_end: Optional[float] = _default("SolverConfig", "t_end")
+    end_margin: float = _default("SolverConfig", "end_margin")  #: (m)
+    gravity: float = _default("SolverConfig", "gravity")  #: (m/s²)
+    contact_tol: float = _default("SolverConfig", "contact_tol")  #: |ΔP| ≤ tol·(static wheel load) per wheel and Newton update
+    contact_max_iter: int = _default("SolverConfig", "contact_max_iter")  #: Newton iterations of the contact per step
+    initial_state: Literal["static", "rest"] = _default("SolverConfig", "initial_state")
+    #: memory a run may allocate (bytes); larger runs are refused up front (docs/limits.md)
+    memory_budget: float = _default("SolverConfig", "memory_budget")
 
 
 @dataclass
-class Output:
-    points: list = field(default_factory=list)  #: observation points (m); empty: x = L/2
+class Output(StrictFields):
+    points: list = _default("OutputConfig", "points")  #: observation points (m); empty: x = L/2
 
 
 @dataclass
-class TIDs:
+class TIDs(StrictFields):
     """``count`` identical tuned inerter dampers between ``upper`` and ``lower`` at
     ``x0 + i·spacing``: spring ``stiffness`` (N/m) and dashpot ``damping`` (N·s/m) from the upper
     layer to an internal node, inerter ``inertance`` (kg) from the node to the lower layer."""
@@ -191,24 +200,24 @@ class TIDs:
     count: int
     x0: float
     spacing: float
-    upper: str = "rail"
-    lower: str = "slab"
+    upper: str = _default("TidConfig", "upper")
+    lower: str = _default("TidConfig", "lower")
 
 
 @dataclass
-class Config:
+class Config(StrictFields):
     """A complete run: structure, discretisation, vehicles or moving forces, speed, solver
     settings, observation points, irregularity and optional TIDs."""
 
     structure: Structure
     speed: float  #: (m/s), +x direction
-    vehicles: list = field(default_factory=list)  #: list[Vehicle]
-    forces: list = field(default_factory=list)  #: list[MovingForce]
+    vehicles: list = _default("Config", "vehicles")  #: list[Vehicle]
+    forces: list = _default("Config", "forces")  #: list[MovingForce]
     discretisation: Discretisation = field(default_factory=Discretisation)
     solver: Solver = field(default_factory=Solver)
     output: Output = field(default_factory=Output)
     irregularity: Irregularity = field(default_factory=Irregularity)
-    tids: Optional[TIDs] = None
+    tids: Optional[TIDs] = _default("Config", "tids")
 
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict:
@@ -232,7 +241,7 @@ class Config:
             else:
                 return None
             w = 2.0 * math.pi * self.speed / lam
-        except (TypeError, ValueError, ZeroDivisionError):
+        except (AttributeError, TypeError, ValueError, ZeroDivisionError):
             return None
         return w if math.isfinite(w) and w > 0 else None
 
@@ -252,9 +261,25 @@ class Config:
 
     @classmethod
     def from_dict(cls, data: dict) -> "Config":
+        """A configuration from a plain nested dict (the shape of :meth:`to_dict`); unknown
+        or missing fields raise :class:`~vtb.errors.ConfigError`. Values are validated by
+        the core when the configuration runs, or now by :meth:`validate`; their types and
+        ranges are checked here, by the core's schema."""
+        from . import _core
+
         cfg = _from_plain(cls, data, "")
-        check_types(cfg)
+        _core.check_schema(cfg.to_core_json())
         return cfg
+
+    def validate(self) -> None:
+        """Checks the whole configuration now (the core's validation, against the generated
+        irregularity) and raises :class:`~vtb.errors.ConfigError` naming the first bad field;
+        :func:`vtb.simulate` does the same check when it runs."""
+        from . import _core
+        from .simulate import _prepare, _profile_args
+
+        text, profile = _prepare(self)
+        _core.validate(text, *_profile_args(profile))
 
     def to_toml(self, path: Union[str, Path, None] = None) -> str:
         import tomli_w
@@ -265,14 +290,43 @@ class Config:
         return text
 
     @classmethod
-    def from_toml(cls, path_or_text: Union[str, Path]) -> "Config":
-        """Loads a TOML file (or TOML text)."""
-        p = Path(path_or_text) if not isinstance(path_or_text, str) or "\n" not in path_or_text else None
-        text = p.read_text() if p is not None else str(path_or_text)
+    def from_toml(cls, path: Union[str, Path]) -> "Config":
+        """Loads a TOML file. ``path`` is always a file name (TOML text goes to
+        :meth:`from_toml_text`); a missing file, a directory or unreadable text raise
+        :class:`~vtb.errors.ConfigError` naming the path."""
+        if not isinstance(path, (str, Path)):
+            raise config_error("path", path, "expected a file path (str or pathlib.Path)")
+        p = Path(path)
+        if isinstance(path, str) and ("\n" in path or "=" in path):
+            try:
+                is_file = p.is_file()
+            except OSError:  # e.g. too long for a file name
+                is_file = False
+            if not is_file:
+                raise config_error("path", path[:60], "no such file; this looks like TOML text: use Config.from_toml_text")
+        if p.is_dir():
+            raise config_error("path", str(p), "is a directory, not a TOML file")
+        try:
+            text = p.read_text()
+        except FileNotFoundError:
+            raise config_error("path", str(p), "no such file") from None
+        except (OSError, UnicodeDecodeError) as e:
+            raise config_error("path", str(p), f"cannot be read: {e}") from None
+        return cls._from_toml(text, str(p))
+
+    @classmethod
+    def from_toml_text(cls, text: str) -> "Config":
+        """Parses TOML text (see :meth:`from_toml` for files)."""
+        if not isinstance(text, str):
+            raise config_error("text", type(text).__name__, "expected TOML text (str)")
+        return cls._from_toml(text, "(text)")
+
+    @classmethod
+    def _from_toml(cls, text: str, source: str) -> "Config":
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
-            raise config_error("<toml>", str(p) if p else "(text)", str(e)) from None
+            raise config_error("<toml>", source, str(e)) from None
         return cls.from_dict(data)
 
     def copy(self) -> "Config":
@@ -280,14 +334,18 @@ class Config:
 
 
 def _check_finite(x, path: str) -> None:
+    """Every leaf is a JSON value (number, string, boolean, null) and every number finite."""
     if isinstance(x, dict):
         for k, v in x.items():
             _check_finite(v, f"{path}.{k}" if path else k)
     elif isinstance(x, list):
         for i, v in enumerate(x):
             _check_finite(v, f"{path}[{i}]")
-    elif isinstance(x, float) and not math.isfinite(x):
-        raise config_error(path, x, "must be a finite number")
+    elif isinstance(x, float):
+        if not math.isfinite(x):
+            raise config_error(path, x, "must be a finite number")
+    elif not (x is None or isinstance(x, (str, int))):
+        raise config_error(path, x, f"a {type(x).__name__} is not a configuration value (number, string, boolean or list)")
 
 
 def _drop_none(x):

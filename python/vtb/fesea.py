@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _core
 from .config import Config
-from .simulate import _validate_python_side
+from .simulate import _prepare
 
 
 @dataclass
@@ -72,8 +72,8 @@ class FeSeaReport:
 def fesea_report(config: Config) -> FeSeaReport:
     """The FE–SEA correction of a hybrid configuration (``config.discretisation.method ==
     "hybrid"``); raises :class:`~vtb.errors.ConfigError` for other methods."""
-    _validate_python_side(config)
-    d = _core.fesea(config.to_core_json())
+    text, _ = _prepare(config)
+    d = _core.fesea(text)
     return FeSeaReport(
         omega_r=d["omega_r"],
         band=tuple(d["band"]),

@@ -48,6 +48,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from .errors import config_error
+from .schema import StrictFields, properties
 
 # --------------------------------------------------------------------------------------------
 # PSD families: one-sided S(f) in m³ for f in 1/m
@@ -184,13 +185,24 @@ def generate_spectral(s: Callable[[np.ndarray], np.ndarray], x: np.ndarray, f_mi
     return out
 
 
+#: Bytes per profile sample held at once while generating (positions, amplitudes, phases,
+#: the complex spectrum and the result).
+_PROFILE_BYTES_PER_SAMPLE = 64.0
+#: Relative error of the realised band variance beyond which a profile warns.
+REALISED_TOLERANCE = 0.02
+
+
+class IrregularityWarning(UserWarning):
+    """A generated irregularity does not realise its band (see :meth:`Irregularity.profile`)."""
+
+
 # --------------------------------------------------------------------------------------------
 # The configuration object
 # --------------------------------------------------------------------------------------------
 
 
 @dataclass
-class Irregularity:
+class Irregularity(StrictFields):
     """Irregularity of the rail top, r(x) (m, dip positive).
 
     ``kind``: a spectrum (``tbt3352``, ``sato``, ``iso3095``, ``german_low``, ``german_high``,
@@ -299,13 +311,25 @@ class Irregularity:
             return self.length / 50.0
         return 1.0
 
-    def profile(self, x_min: float, x_max: float) -> tuple[float, float, np.ndarray]:
-        """Samples r(x) (m) on [x_min, x_max]: returns (x0, dx, values)."""
+    def profile(self, x_min: float, x_max: float, memory_budget: Optional[float] = None) -> tuple[float, float, np.ndarray]:
+        """Samples r(x) (m) on [x_min, x_max]: returns (x0, dx, values). A sample count whose
+        arrays would exceed ``memory_budget`` bytes (default: the core's
+        ``solver.memory_budget``) raises :class:`~vtb.errors.ConfigError`; an inverse-FFT
+        spectrum whose band the sampled length cannot realise (λ_max beyond it) warns with
+        the realised fraction of the band's variance (:class:`IrregularityWarning`)."""
         if self.kind == "none":
             return 0.0, 1.0, np.zeros(0)
         if self.kind == "sampled":
             return float(self.x0), float(self.dx), np.asarray(self.values, dtype=float) * self.scale
         dx = self.sample_spacing()
+        samples = (x_max - x_min) / dx + 1.0
+        budget = properties("SolverConfig")["memory_budget"]["default"] if memory_budget is None else memory_budget
+        if not samples * _PROFILE_BYTES_PER_SAMPLE <= budget:
+            raise config_error(
+                "irregularity.dx", dx,
+                f"{samples:.3e} samples over {x_max - x_min:g} m would need about {samples * _PROFILE_BYTES_PER_SAMPLE / 1e9:.3g} GB, "
+                f"beyond solver.memory_budget = {budget / 1e9:.3g} GB",
+            )
         n = int(math.ceil((x_max - x_min) / dx)) + 1
         x = x_min + dx * np.arange(n)
         if self.kind in SPECTRA:
@@ -313,6 +337,7 @@ class Irregularity:
             rng = np.random.default_rng(self.seed)
             f_min, f_max = 1.0 / self.wavelength_max, 1.0 / self.wavelength_min
             if self.method == "ifft":
+                self._check_realised_band(s, n, dx)
                 r = generate_ifft(s, n, dx, f_min, f_max, rng)
             else:
                 r = generate_spectral(s, x - x_min, f_min, f_max, self.n_freq, rng)
@@ -323,6 +348,26 @@ class Irregularity:
             inside = (x >= self.start) & (x <= self.end)
             r = np.where(inside, 0.5 * self.amplitude * (1.0 - np.cos(2.0 * math.pi * (x - self.start) / self.wavelength)), 0.0)
         return float(x_min), float(dx), r * self.scale
+
+    def _check_realised_band(self, s, n: int, dx: float) -> None:
+        """Warns when the inverse FFT's frequency grid (spacing 1/(n·dx)) realises the band's
+        variance to worse than :data:`REALISED_TOLERANCE` (a band longer than the profile)."""
+        df = 1.0 / (n * dx)
+        k = np.arange(1, (n + 1) // 2)
+        f = k * df
+        band = (f >= 1.0 / self.wavelength_max) & (f <= 1.0 / self.wavelength_min)
+        realised = float(np.sum(s(f[band])) * df)
+        target = band_variance(self.kind, self.wavelength_min, self.wavelength_max, sato_a=self.sato_a)
+        fraction = realised / target if target > 0 else 1.0
+        if abs(fraction - 1.0) > REALISED_TOLERANCE:
+            import warnings
+
+            warnings.warn(
+                f"irregularity: the {n * dx:g} m profile realises {fraction:.1%} of the variance of the band "
+                f"[{self.wavelength_min:g}, {self.wavelength_max:g}] m (its frequency spacing is 1/{n * dx:g} 1/m); "
+                "shorten wavelength_max or lengthen the structure",
+                IrregularityWarning, stacklevel=3,
+            )
 
     def target_variance(self) -> float:
         """Variance (m²) the spectrum assigns to the band, including ``scale``."""

@@ -218,4 +218,4 @@ def example_text(name: str) -> str:
 def example_config(name: str) -> Config:
     """A shipped example configuration (see :func:`examples`), e.g. ``"article"``: the
     article's case with the calibrated irregularity, as ``vtb simulate --config article``."""
-    return Config.from_toml(example_text(name))
+    return Config.from_toml_text(example_text(name))

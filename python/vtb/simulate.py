@@ -11,25 +11,48 @@ import numpy as np
 
 from . import _core
 from .config import Config, check_types
+from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
 _PROFILE_MARGIN = 0.0
 
 
-def _validate_python_side(cfg: Config) -> None:
+def _real(v) -> Optional[float]:
+    """``v`` as a float when it is a finite real number (not a bool), else ``None``."""
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+        return None
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def _prepare(cfg: Config) -> tuple[str, tuple]:
+    """The core JSON of a configuration and its irregularity profile (x0, dx, values). Only
+    the irregularity, which lives on this side, is checked here; the core validates the rest
+    once, when it runs the configuration."""
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
-    check_types(cfg)
-    cfg.irregularity.validate(speed=cfg.speed, dt=cfg.solver.dt)
-    # The core checks everything else before a profile is generated from the structure.
-    _core.validate(cfg.to_core_json())
+    text = cfg.to_core_json()
+    if not isinstance(cfg.irregularity, Irregularity):
+        raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
+    check_types(cfg.irregularity, "irregularity")
+    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)))
+    return text, irregularity_profile(cfg)
 
 
 def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
-    """The sampled irregularity (x0, dx, values in m) a configuration runs on."""
-    L = cfg.structure.length
-    return cfg.irregularity.profile(-_PROFILE_MARGIN, L + _PROFILE_MARGIN)
+    """The sampled irregularity (x0, dx, values in m) a configuration runs on. A structure
+    length the core will refuse gets no profile (the core then names the length)."""
+    L = _real(getattr(cfg.structure, "length", None))
+    if L is None or L <= 0:
+        return 0.0, 1.0, np.zeros(0)
+    budget = _real(getattr(cfg.solver, "memory_budget", None))
+    return cfg.irregularity.profile(-_PROFILE_MARGIN, L + _PROFILE_MARGIN, memory_budget=budget)
+
+
+def _profile_args(profile: tuple) -> tuple:
+    x0, dx, values = profile
+    return x0, dx, values if values.size else None
 
 
 @dataclass
@@ -130,9 +153,8 @@ def _result(out: dict, config: Config) -> Result:
 
 def simulate(config: Config) -> Result:
     """Runs one configuration (Ctrl-C interrupts it)."""
-    _validate_python_side(config)
-    x0, dx, values = irregularity_profile(config)
-    out = _core.simulate(config.to_core_json(), x0, dx, values if values.size else None)
+    text, profile = _prepare(config)
+    out = _core.simulate(text, *_profile_args(profile))
     return _result(out, config)
 
 
@@ -172,19 +194,22 @@ def simulate_batch(
     order = []
     for i, cfg in enumerate(configs):
         try:
-            _validate_python_side(cfg)
+            if not isinstance(cfg, Config):
+                raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
+            key = (repr(cfg.irregularity), repr(getattr(cfg.structure, "length", None)), repr(getattr(cfg.solver, "memory_budget", None)))
+            if key not in keys:
+                text, profile = _prepare(cfg)
+                keys[key] = len(profiles)
+                profiles.append(_profile_args(profile))
+            else:
+                text = cfg.to_core_json()
         except VtbError as e:
             if on_error == "raise":
                 raise
             results[i] = e
             continue
-        key = (repr(cfg.irregularity), cfg.structure.length)
-        if key not in keys:
-            keys[key] = len(profiles)
-            x0, dx, values = irregularity_profile(cfg)
-            profiles.append((x0, dx, values if values.size else None))
         profile_index.append(keys[key])
-        jsons.append(cfg.to_core_json())
+        jsons.append(text)
         order.append(i)
     bar, callback = None, None
     if progress is True:

@@ -393,10 +393,8 @@ def sweep(
         config.tids = tids_around(config)
     cases = [(0, math.nan, math.nan, math.nan)] + grid(b_t, k_t, c_t)
     # Validate one controlled case up front so that a bad grid fails before any run.
-    from .simulate import _validate_python_side
-
     for _, b, k, c in cases[1:2]:
-        _validate_python_side(case_config(config, b, k, c))
+        case_config(config, b, k, c).validate()
     journal = None
     if out is not None:
         out = Path(out)

@@ -67,7 +67,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from . import _core
-from .config import Config, Solver, _to_plain, check_types
+from .config import Config, Solver, _to_plain
 from .errors import SolverError, config_error
 
 __all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT"]
@@ -110,7 +110,6 @@ def _structure_json(config: Config) -> str:
     neutral single zero force, so that only the structure is validated and assembled."""
     if not isinstance(config, Config):
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
-    check_types(config)
     d = json.loads(config.to_core_json())  # resolves a hybrid's default ω_r from the irregularity
     d["vehicles"] = []
     d["forces"] = [{"magnitude": 0.0, "x0": 0.0, "layer": None}]

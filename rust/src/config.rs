@@ -4,12 +4,13 @@
 //! Units are SI throughout (m, s, kg, N, Pa). Displacements are positive downward.
 
 use crate::error::{Result, VtbError};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Name used in coupling definitions for the fixed ground below the lowest layer.
 pub const GROUND: &str = "ground";
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
     pub structure: StructureConfig,
@@ -32,7 +33,7 @@ pub struct Config {
     pub tids: Option<TidConfig>,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StructureConfig {
     /// Common length L of all layers (m); x runs from 0 to L.
@@ -44,7 +45,7 @@ pub struct StructureConfig {
     pub couplings: Vec<CouplingConfig>,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LayerConfig {
     pub name: String,
@@ -77,7 +78,7 @@ pub struct LayerConfig {
 }
 
 /// Rayleigh damping C = αM + βK of one layer.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum RayleighConfig {
     /// Damping ratio `ratio` at the two frequencies `f1` < `f2` (Hz).
@@ -102,7 +103,7 @@ impl RayleighConfig {
     }
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum CouplingKind {
     /// Point springs at `positions` (stiffness N/m, damping N·s/m per point).
@@ -111,7 +112,7 @@ pub enum CouplingKind {
     Continuous,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingConfig {
     pub upper: String,
@@ -126,7 +127,7 @@ pub struct CouplingConfig {
     pub positions: Vec<f64>,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     /// Hermite + sine modes, all global, no correction (article §2.1).
@@ -138,7 +139,7 @@ pub enum Method {
     Fem,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretisationConfig {
     #[serde(default)]
@@ -169,7 +170,7 @@ fn default_true() -> bool {
 }
 
 /// How the FE–SEA correction couples the rail's global functions to its local modes.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum FeSeaCoupling {
     /// The exact coupling D_gj = K_gj + iωC_gj − ω²M_gj (bending and rail springs included),
@@ -200,7 +201,7 @@ impl Default for DiscretisationConfig {
 
 /// Zhai's 10-DOF vertical car (model.md §3). Suspension constants are per bogie (secondary)
 /// and per wheelset (primary), both sides lumped.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleConfig {
     /// Car body mass (kg) and pitch inertia (kg·m²).
@@ -257,7 +258,7 @@ impl VehicleConfig {
     }
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MovingForceConfig {
     /// Force (N), positive downward.
@@ -269,7 +270,7 @@ pub struct MovingForceConfig {
     pub layer: Option<String>,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum InitialState {
     /// Static equilibrium of the loaded system (contact included).
@@ -280,7 +281,7 @@ pub enum InitialState {
     Rest,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverConfig {
     /// Newmark time step (s).
@@ -304,6 +305,10 @@ pub struct SolverConfig {
     pub contact_max_iter: usize,
     #[serde(default)]
     pub initial_state: InitialState,
+    /// Memory a run may allocate (bytes): a run whose matrices or histories are estimated to
+    /// need more is refused up front (docs/limits.md).
+    #[serde(default = "default_memory_budget")]
+    pub memory_budget: f64,
 }
 
 fn default_dt() -> f64 {
@@ -321,6 +326,9 @@ fn default_contact_tol() -> f64 {
 fn default_contact_max_iter() -> usize {
     50
 }
+fn default_memory_budget() -> f64 {
+    8e9
+}
 
 impl Default for SolverConfig {
     fn default() -> Self {
@@ -332,11 +340,12 @@ impl Default for SolverConfig {
             contact_tol: default_contact_tol(),
             contact_max_iter: default_contact_max_iter(),
             initial_state: InitialState::Static,
+            memory_budget: default_memory_budget(),
         }
     }
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema, Default)]
 #[serde(deny_unknown_fields)]
 pub struct OutputConfig {
     /// Observation points (m); empty means x = L/2. Metrics use the first point.
@@ -345,7 +354,7 @@ pub struct OutputConfig {
 }
 
 /// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TidConfig {
     /// Inertance b_t (kg), stiffness k_t (N/m), damping c_t (N·s/m).
@@ -463,13 +472,49 @@ fn within(field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64> {
 pub const MAX_STEPS: usize = 20_000_000;
 /// Upper bound on sine modes of one layer.
 pub const MAX_MODES: usize = 20_000;
+/// Upper bound on the dampers of a run: their coupling is a dense count × count matrix,
+/// inverted once per run (O(count³)) and applied every step (O(count²)).
+pub const MAX_TIDS: usize = 2_000;
+/// Time-step counts within this of a whole number are whole (t_end is a multiple of dt).
+const STEP_TOL: f64 = 1e-6;
 /// Upper bound on FEM elements per layer.
 pub const MAX_ELEMENTS: usize = 200_000;
 
 impl Config {
+    /// Parses the JSON form; a field of the wrong type or range is reported with its dotted
+    /// path (`tids.count`, `structure.layers[0].modes`) and the value found there.
     pub fn from_json(text: &str) -> Result<Config> {
-        serde_json::from_str(text)
-            .map_err(|e| VtbError::config("<config>", "(json)", e.to_string()))
+        let tree: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| VtbError::config("<json>", "(text)", e.to_string()))?;
+        serde_path_to_error::deserialize(&tree).map_err(|e| {
+            let reason = e.inner().to_string();
+            let mut path = e.path().to_string();
+            // An unknown field is reported at its parent: name the field itself.
+            if let Some(name) = reason
+                .strip_prefix("unknown field `")
+                .and_then(|r| r.split('`').next())
+            {
+                path = if path == "." {
+                    name.to_string()
+                } else {
+                    format!("{path}.{name}")
+                };
+            }
+            let value =
+                value_at(&tree, &path).map_or_else(|| "(missing)".to_string(), |v| v.to_string());
+            let field = if path == "." {
+                "<config>".to_string()
+            } else {
+                path
+            };
+            VtbError::config(field, value, reason)
+        })
+    }
+
+    /// The JSON schema of the configuration (fields, types, defaults, documentation): the
+    /// one definition the Python layer derives its defaults from and is tested against.
+    pub fn schema() -> String {
+        serde_json::to_string(&schemars::schema_for!(Config)).expect("schema serialises")
     }
 
     pub fn to_json(&self) -> String {
@@ -487,12 +532,24 @@ impl Config {
         (t_end / self.solver.dt).round().max(1.0) as usize
     }
 
-    /// End time of the run (s), explicit or from the leading wheel/force reaching
+    /// End time of the run (s), where its last step lands: explicit (validated to be a whole
+    /// number of steps), or the whole step nearest to the leading wheel/force reaching
     /// L − end_margin.
     pub fn t_end(&self) -> f64 {
         if let Some(t) = self.solver.t_end {
             return t;
         }
+        let dt = self.solver.dt;
+        let t = self.lead_time();
+        if dt > 0.0 && t.is_finite() {
+            (t / dt).round() * dt
+        } else {
+            t
+        }
+    }
+
+    /// Time (s) at which the leading wheel/force reaches L − end_margin.
+    fn lead_time(&self) -> f64 {
         let lead = self
             .vehicles
             .iter()
@@ -678,8 +735,21 @@ impl Config {
                 "must be >= 1",
             ));
         }
+        positive("solver.memory_budget", sv.memory_budget)?;
         if let Some(t) = sv.t_end {
             positive("solver.t_end", t)?;
+            let steps = t / dt;
+            if (steps - steps.round()).abs() > STEP_TOL && steps < MAX_STEPS as f64 {
+                let (lo, hi) = (steps.floor().max(1.0) * dt, steps.ceil() * dt);
+                return Err(VtbError::config(
+                    "solver.t_end",
+                    format!("{t:?}"),
+                    format!(
+                        "is not a whole number of time steps dt = {dt:?} (t_end/dt = {steps:.6}): \
+                         the nearest valid end times are {lo:?} and {hi:?} s"
+                    ),
+                ));
+            }
         } else if speed == 0.0 {
             return Err(VtbError::config(
                 "solver.t_end",
@@ -835,7 +905,7 @@ impl Config {
         if let Some(t) = &self.tids {
             self.validate_tids(t, length)?;
         }
-        Ok(())
+        crate::budget::check_model(self)
     }
 
     /// Timoshenko properties (both or neither, finite elements only) and the element length.
@@ -896,6 +966,16 @@ impl Config {
                 "must be >= 1 (omit `tids` for no dampers)",
             ));
         }
+        if t.count > MAX_TIDS {
+            return Err(VtbError::config(
+                "tids.count",
+                t.count,
+                format!(
+                    "must be <= {MAX_TIDS}: the dampers' coupling is a dense count × count matrix \
+                     inverted once per run and applied every step"
+                ),
+            ));
+        }
         within("tids.x0", t.x0, 0.0, length, "the structure")?;
         if t.count > 1 {
             positive("tids.spacing", t.spacing)?;
@@ -933,4 +1013,19 @@ impl Config {
         }
         Ok(())
     }
+}
+
+/// The value at a dotted path (`a.b[2].c`) of a JSON tree.
+fn value_at<'v>(tree: &'v serde_json::Value, path: &str) -> Option<&'v serde_json::Value> {
+    let mut v = tree;
+    for part in path.split('.').filter(|p| !p.is_empty()) {
+        let (name, indices) = part.split_once('[').map_or((part, ""), |(n, r)| (n, r));
+        if !name.is_empty() {
+            v = v.get(name)?;
+        }
+        for idx in indices.split('[').filter(|s| !s.is_empty()) {
+            v = v.get(idx.trim_end_matches(']').parse::<usize>().ok()?)?;
+        }
+    }
+    Some(v)
 }

@@ -119,7 +119,9 @@ impl ContactSolver {
         if rnorm <= self.tol {
             return Ok(0);
         }
+        let mut iterations = 0;
         for it in 1..=self.max_iter {
+            iterations = it;
             // J = I + diag(h′(δ))·A
             for i in 0..n {
                 let kh = stiffness(self.g[i], self.delta[i]);
@@ -166,7 +168,7 @@ impl ContactSolver {
             time,
             step,
             residual,
-            iterations: self.max_iter,
+            iterations,
         })
     }
 }

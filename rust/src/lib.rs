@@ -13,6 +13,7 @@
 
 pub mod banded;
 pub mod basis;
+pub mod budget;
 pub mod config;
 pub mod contact;
 pub mod couplings;

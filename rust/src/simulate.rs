@@ -425,6 +425,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 .map(|k| st.layers[0].offset + k)
                 .collect()
         };
+        crate::budget::check_histories(cfg, record, W)?;
         let (m, c, k) = st.stepping_matrices();
         let mut track = Newmark::<W>::new(
             m,
@@ -976,6 +977,15 @@ impl<'m, const W: usize> Simulation<'m, W> {
                         });
                     }
                 }
+                // A finite state can still give an overflowing index (an acceleration of
+                // 1e308 squared in an r.m.s.): never return it as a result.
+                if let Some((name, v)) = r.metrics().into_iter().find(|(_, v)| !v.is_finite()) {
+                    return Err(VtbError::Solver(format!(
+                        "the index {name} = {v} is not finite at the end of the run (step {}): \
+                         an overflow, most likely from parameters of extreme magnitude",
+                        r.n_steps
+                    )));
+                }
                 Ok(r)
             })
             .collect())
@@ -989,14 +999,23 @@ impl<'m, const W: usize> Simulation<'m, W> {
             if self.lanes[j].error.is_some() {
                 continue;
             }
-            let ok = self.track.lane_finite(j)
-                && self.p[j * nw..(j + 1) * nw].iter().all(|v| v.is_finite())
-                && self.cars.iter().all(|c| c.nm.lane_finite(j));
-            if !ok {
+            let quantity = if !self.track.lane_finite(j) {
+                Some("the structure's displacements".to_string())
+            } else if !self.p[j * nw..(j + 1) * nw].iter().all(|v| v.is_finite()) {
+                Some("the contact forces".to_string())
+            } else {
+                (0..self.cars.len())
+                    .find(|&i| !self.cars[i].nm.lane_finite(j))
+                    .map(|i| format!("the DOFs of vehicles[{i}]"))
+            };
+            if let Some(q) = quantity {
                 self.fail(
                     j,
                     VtbError::Solver(format!(
-                        "the state became non-finite by step {step}: parameters of extreme magnitude?"
+                        "{q} became non-finite by step {step} (t = {:.6} s): an overflow, most \
+                         likely from parameters of extreme magnitude (a mass or stiffness many \
+                         orders from the others)",
+                        step as f64 * self.model.cfg.solver.dt
                     )),
                 );
             }

@@ -436,6 +436,20 @@ fn batch<'py>(
     Ok(out)
 }
 
+/// Parses a JSON configuration against the schema (types, ranges, unknown and missing
+/// fields) without validating its values; raises naming the field.
+#[pyfunction]
+fn check_schema(py: Python<'_>, config_json: &str) -> PyResult<()> {
+    parse_config(py, config_json).map(|_| ())
+}
+
+/// The JSON schema of the configuration (fields, types, defaults, docs) from the core's
+/// serde types: the single definition of the configuration.
+#[pyfunction]
+fn schema() -> String {
+    Config::schema()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
@@ -445,6 +459,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fesea, m)?)?;
     m.add_function(wrap_pyfunction!(shapes, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
+    m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(check_schema, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())
