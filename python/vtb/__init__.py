@@ -10,7 +10,7 @@ Quick start::
 See ``README.md`` for units and conventions and ``docs/`` for the model and its choices.
 """
 
-from . import irregularity
+from . import comfort, irregularity, spectra
 from ._core import __version__
 from .config import (
     Config,

@@ -117,6 +117,57 @@ class Result:
         """Car-body bounce acceleration of the first car (m/s²)."""
         return self.vehicle_acc[:, 0, 0]
 
+    def series(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None) -> tuple[np.ndarray, np.ndarray]:
+        """(t, x) of a layer's ``quantity`` (``"acc"`` m/s², ``"disp"`` m) at an observation
+        point, or of the first car body's bounce with ``layer="car_body"``, cut to the
+        analysis ``window`` (t0, t1) in s when given."""
+        if quantity not in ("acc", "disp"):
+            raise config_error("quantity", quantity, 'must be "acc" or "disp"')
+        if layer == "car_body":
+            x = self.car_body_acc if quantity == "acc" else self.car_body_disp
+        else:
+            x = (self.acceleration if quantity == "acc" else self.displacement)(layer, point)
+        t = self.t
+        if window is not None:
+            t0, t1 = window
+            keep = (t >= t0) & (t <= t1)
+            if keep.sum() < 8:
+                raise config_error("window", window, f"holds fewer than 8 samples of the run [0, {t[-1]:g}] s")
+            t, x = t[keep], x[keep]
+        return t, x
+
+    def spectrum(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, nperseg: Optional[int] = None) -> tuple[np.ndarray, np.ndarray]:
+        """One-sided PSD (Welch, Hann window, half-overlapping segments; :mod:`vtb.spectra`) of
+        :meth:`series`: (f in Hz, PSD in (m/s²)²/Hz or m²/Hz)."""
+        from .spectra import psd
+
+        t, x = self.series(layer, quantity, point, window)
+        return psd(x, 1.0 / self.config.solver.dt, nperseg)
+
+    def third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
+        """IEC 61260-1 one-third-octave band levels of :meth:`series`, in dB re 1e−6 m/s²
+        (acceleration) or 1e−9 m (displacement); see :func:`vtb.spectra.third_octave`."""
+        from .spectra import third_octave
+
+        t, x = self.series(layer, quantity, point, window)
+        return third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
+
+    def comfort(self, car: int = 0, window: Optional[tuple] = None) -> dict:
+        """ISO 2631-1 ride-comfort indices of a car body's vertical acceleration (Wk-weighted
+        r.m.s. ``a_w`` and ``mtvv`` in m/s²; :func:`vtb.comfort.iso2631`), optionally over an
+        analysis ``window`` (t0, t1) in s. Short records warn (:class:`vtb.comfort.ComfortWarning`)."""
+        from .comfort import iso2631
+
+        if isinstance(car, bool) or not isinstance(car, int) or not 0 <= car < self.vehicle_acc.shape[1]:
+            raise config_error("car", car, f"must index one of the {self.vehicle_acc.shape[1]} cars")
+        a, t = self.vehicle_acc[:, car, 0], self.t
+        if window is not None:
+            keep = (t >= window[0]) & (t <= window[1])
+            if keep.sum() < 8:
+                raise config_error("window", window, f"holds fewer than 8 samples of the run [0, {t[-1]:g}] s")
+            a = a[keep]
+        return iso2631(a, 1.0 / self.config.solver.dt)
+
     def save(self, path) -> None:
         """Writes the histories and metrics to a compressed ``.npz`` file."""
         np.savez_compressed(

@@ -1,0 +1,88 @@
+"""Spectra and one-third-octave band levels against signals with known answers: a sine of
+known amplitude lands in its band at 20·log10(A/√2 / ref) dB; white noise has band power
+PSD·(f2 − f1) with PSD = 2σ²/fs; the PSD integrates to the variance (Parseval); the bands
+are IEC 61260-1's base-10 bands."""
+
+import math
+
+import numpy as np
+import pytest
+
+import vtb
+from vtb import spectra
+
+FS = 20_000.0
+
+
+def test_band_edges_and_labels_are_iec_61260_base_10():
+    b = spectra.third_octave(np.random.default_rng(0).standard_normal(40_000), FS)
+    assert np.allclose(b["upper"] / b["lower"], 10 ** 0.1)
+    assert np.allclose(np.sqrt(b["upper"] * b["lower"]), b["centre"])
+    i = int(np.argmin(abs(b["centre"] - 1000.0)))
+    assert b["centre"][i] == pytest.approx(1000.0)
+    # consecutive bands touch, and the labels are the standard's nominal frequencies
+    assert np.allclose(b["upper"][:-1], b["lower"][1:])
+    labels = {round(v, 6) for v in b["nominal"]}
+    assert {31.5, 40.0, 50.0, 63.0, 80.0, 100.0, 125.0, 160.0, 200.0, 250.0, 315.0, 1000.0, 1250.0, 3150.0} <= labels
+
+
+@pytest.mark.parametrize("x_band", [-15, -10, -3, 0, 7])
+def test_a_sine_lands_in_its_band_within_a_tenth_of_a_decibel(x_band):
+    fm = 1000.0 * 10 ** (x_band / 10)
+    a = 3.7
+    t = np.arange(int(2.0 * FS)) / FS
+    b = spectra.third_octave(a * np.sin(2 * math.pi * fm * t + 0.3), FS)
+    i = int(np.argmin(abs(b["centre"] - fm)))
+    expected = 20 * math.log10(a / math.sqrt(2) / 1e-6)
+    assert b["level"][i] == pytest.approx(expected, abs=0.1)
+    # the neighbouring bands hold far less
+    assert b["level"][i - 2] < expected - 30 and b["level"][i + 2] < expected - 30
+
+
+def test_white_noise_has_the_expected_band_levels():
+    sigma = 0.2
+    x = sigma * np.random.default_rng(1).standard_normal(int(20.0 * FS))
+    b = spectra.third_octave(x, FS, quantity="disp")
+    expected = 10 * np.log10(2 * sigma**2 / FS * (b["upper"] - b["lower"]) / 1e-9**2)
+    wide = b["centre"] >= 100.0  # enough bins for a small statistical error
+    assert np.abs(b["level"][wide] - expected[wide]).max() < 0.3
+
+
+def test_the_psd_integrates_to_the_variance():
+    rng = np.random.default_rng(2)
+    x = np.cumsum(rng.standard_normal(200_000)) * 1e-3  # red noise: the variance sits low
+    x = x - np.convolve(x, np.ones(2001) / 2001, mode="same")  # high-passed
+    x = x[5000:-5000]
+    f, p = spectra.psd(x, FS)
+    assert np.trapezoid(p, f) == pytest.approx(np.var(x), rel=0.03)
+
+
+def test_bad_signals_and_options_are_named():
+    with pytest.raises(vtb.ConfigError) as e:
+        spectra.psd(np.ones((4, 4)), FS)
+    assert e.value.field == "signal"
+    with pytest.raises(vtb.ConfigError) as e:
+        spectra.psd(np.ones(100), -1.0)
+    assert e.value.field == "fs"
+    with pytest.raises(vtb.ConfigError) as e:
+        spectra.third_octave(np.ones(100), FS, quantity="jerk")
+    assert e.value.field == "quantity"
+
+
+def test_result_band_levels_of_a_run():
+    cfg = vtb.paper_config()
+    for layer in cfg.structure.layers:
+        layer.modes = 8
+    cfg.structure.layers[0].local_modes = 8
+    cfg.solver.t_end = 0.2
+    res = vtb.simulate(cfg)
+    f, p = res.spectrum("rail")
+    t, a = res.series("rail")
+    assert np.trapezoid(p, f) == pytest.approx(np.var(a), rel=0.25)  # a short, non-stationary record
+    b = res.third_octave("rail", window=(0.05, 0.2))
+    assert np.isfinite(b["level"]).all() and b["reference"] == 1e-6
+    d = res.third_octave("slab", quantity="disp")
+    assert d["reference"] == 1e-9
+    with pytest.raises(vtb.ConfigError) as e:
+        res.third_octave("rail", window=(5.0, 6.0))
+    assert e.value.field == "window"
