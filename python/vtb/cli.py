@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import sys
 import tempfile
 import time
@@ -88,10 +89,12 @@ def _load_config(path: str | None):
 
 
 def _print_metrics(metrics: dict, out=None) -> None:
+    from .simulate import metric_unit
+
     out = out or sys.stdout
     width = max(len(k) for k in metrics)
     for k, v in metrics.items():
-        print(f"{k:<{width}}  {v:.6g}", file=out)
+        print(f"{k:<{width}}  {v:<12.6g} {metric_unit(k)}", file=out)
 
 
 def cmd_simulate(args) -> int:
@@ -130,7 +133,7 @@ def cmd_validate(args) -> int:
     check_out_file(args.out, "--out", args.force)
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         cases = run_study(progress=not args.no_progress, executor=pool)
-    command = "vtb validate --out " + str(args.out)
+    command = shlex.join(["vtb", *args.argv])
     write_report(cases, args.out, command=command)
     ref = next(c for c in cases if c.label == REFERENCE)
     for c in cases:
@@ -242,7 +245,10 @@ def cmd_reproduce(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     p = argparse.ArgumentParser(prog="vtb", description="Vehicle–track–bridge vertical dynamics.")
+    p.add_argument("--version", action="version", version=f"vtb {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("simulate", help="run one configuration (default: the article's case) and print its metrics")
     s.add_argument("--config", help="TOML configuration, or a shipped example's name (vtb examples) (default: vtb.paper_config())")
@@ -303,7 +309,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(argv)
+    args.argv = argv
     try:
         return args.func(args)
     except VtbError as e:

@@ -219,6 +219,24 @@ class Config(StrictFields):
     irregularity: Irregularity = field(default_factory=Irregularity)
     tids: Optional[TIDs] = _default("Config", "tids")
 
+    def __repr__(self) -> str:
+        """One line: method, layers (modes), length, loads, speed, step, irregularity, dampers.
+        ``to_dict()`` or ``to_toml()`` show everything."""
+        try:
+            layers = ", ".join(
+                f"{l.name}({l.modes}{'+' + str(l.local_modes) if l.local_modes else ''})" if self.discretisation.method != "fem" else l.name
+                for l in self.structure.layers
+            )
+            irr = self.irregularity
+            irr_text = irr.kind if irr.kind in ("none", "sampled") else f"{irr.kind} seed {irr.seed}, scale {irr.scale:g}"
+            t = self.tids
+            tids = "none" if t is None else f"{t.count} × (b_t {t.inertance:g} kg, k_t {t.stiffness:g} N/m, c_t {t.damping:g} N·s/m) {t.upper}–{t.lower}"
+            end = "auto" if self.solver.t_end is None else f"{self.solver.t_end:g} s"
+            return (f"Config({self.discretisation.method}: {layers}; L = {self.structure.length:g} m; {len(self.vehicles)} car(s), "
+                    f"{len(self.forces)} force(s) at {self.speed:g} m/s; dt = {self.solver.dt:g} s, t_end {end}; irregularity {irr_text}; TIDs {tids})")
+        except Exception:  # noqa: BLE001 - a malformed config still has a representation
+            return f"Config(<{len(self.__dict__)} fields; to_dict() shows them>)"
+
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict:
         """Plain nested dict (TOML/JSON friendly; damping carries a ``kind`` tag)."""

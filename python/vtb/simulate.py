@@ -14,6 +14,18 @@ from .config import Config, check_types
 from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
+#: Units of the metrics by the ending of their names (``{layer}_acc_max`` → m/s²).
+METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("contact_force_max", "N"), ("contact_force_min", "N"), ("contact_loss_events", "–"))
+
+
+def metric_unit(name: str) -> str:
+    """The unit of a metric (``"m/s²"`` for ``rail_acc_max``)."""
+    for ending, unit in METRIC_UNITS:
+        if name.endswith(ending):
+            return unit
+    raise config_error("metric", name, "no such metric")
+
+
 #: Extra length of generated irregularity beyond the structure at each end (m).
 _PROFILE_MARGIN = 0.0
 
@@ -93,6 +105,12 @@ class Result:
         """
         return dict(self._metrics)
 
+    def __repr__(self) -> str:
+        top = self.layer_names[0] if self.layer_names else ""
+        shown = ", ".join(f"{k} = {self._metrics[k]:.4g} {metric_unit(k)}" for k in (f"{top}_acc_max", f"{top}_disp_max") if k in self._metrics)
+        return (f"Result({len(self.t) - 1} steps of {self.t[1] - self.t[0] if len(self.t) > 1 else 0:g} s, layers {self.layer_names}, "
+                f"points {list(self.points)}, {self.vehicle_acc.shape[1]} car(s), {len(self.contact_loss)} contact-loss period(s); {shown})")
+
     def layer(self, name: str) -> int:
         try:
             return self.layer_names.index(name)
@@ -169,9 +187,13 @@ class Result:
         return iso2631(a, 1.0 / self.config.solver.dt)
 
     def save(self, path) -> None:
-        """Writes the histories and metrics to a compressed ``.npz`` file."""
+        """Writes the histories, metrics, contact-loss periods and the configuration that made
+        them (as TOML) to a compressed ``.npz`` file; :func:`load` reads it back."""
         np.savez_compressed(
             path,
+            format=np.array(RESULT_FORMAT),
+            config=np.array(self.config.to_toml()),
+            contact_loss=np.array([(w, s, np.nan if e is None else e) for w, s, e in self.contact_loss], dtype=float).reshape(-1, 3),
             t=self.t,
             disp=self.disp,
             acc=self.acc,
@@ -183,6 +205,30 @@ class Result:
             metric_names=np.array(list(self._metrics)),
             metric_values=np.array(list(self._metrics.values())),
         )
+
+
+#: The tag :meth:`Result.save` writes and :func:`load` checks.
+RESULT_FORMAT = "vtb.Result 1"
+
+
+def load(path) -> Result:
+    """A :class:`Result` written by :meth:`Result.save` (histories, metrics, contact-loss
+    periods and its configuration); anything else raises :class:`~vtb.errors.ConfigError`."""
+    try:
+        with np.load(path, allow_pickle=False) as d:
+            if "format" not in d or str(d["format"]) != RESULT_FORMAT:
+                raise config_error("path", str(path), f"is not a file written by vtb.Result.save ({RESULT_FORMAT})")
+            loss = [(int(w), float(s), None if np.isnan(e) else float(e)) for w, s, e in d["contact_loss"]]
+            return Result(
+                t=d["t"], disp=d["disp"], acc=d["acc"], vehicle_disp=d["vehicle_disp"], vehicle_acc=d["vehicle_acc"],
+                contact_force=d["contact_force"], contact_loss=loss, layer_names=[str(n) for n in d["layer_names"]],
+                points=[float(p) for p in d["points"]], config=Config.from_toml_text(str(d["config"])),
+                _metrics={str(k): float(v) for k, v in zip(d["metric_names"], d["metric_values"])},
+            )
+    except FileNotFoundError:
+        raise config_error("path", str(path), "no such file") from None
+    except (OSError, ValueError, KeyError) as e:
+        raise config_error("path", str(path), f"cannot be read as a vtb result: {e}") from None
 
 
 def _result(out: dict, config: Config) -> Result:
