@@ -1,31 +1,102 @@
-"""Figures (matplotlib is an optional extra: ``pip install 'vtb[plot]'``)."""
+"""Figures (matplotlib is an optional extra: ``pip install 'vtb[plot]'``).
+
+Every function builds a :class:`matplotlib.figure.Figure` directly (no pyplot state), so
+importing this module never changes the user's backend; each returns the figure and, given
+``path``, also writes it (the format from the suffix: ``.png``, ``.pdf``, ``.svg``). Axes carry
+units, reference lines carry legend entries, and traces drawn over each other differ in line
+style as well as colour.
+"""
 
 from __future__ import annotations
 
-import matplotlib
+from typing import Optional, Sequence
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
+
+#: Line styles cycled with the colours, so overlapping traces stay distinguishable in print.
+STYLES = ("-", "--", "-.", ":")
 
 
-def plot_histories(result, path, layers=("rail", "slab")) -> None:
+def _finish(fig: Figure, path) -> Figure:
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig
+
+
+def plot_histories(result, path=None, layers=("rail", "slab")) -> Figure:
     """Displacement and acceleration histories of the given layers at the first observation
-    point (the article's Fig. 3 layout), plus the car body, written to ``path``."""
+    point (the article's Fig. 3 layout), plus the car body."""
     names = [n for n in layers if n in result.layer_names]
-    fig, axes = plt.subplots(len(names) + 1, 2, figsize=(11, 2.6 * (len(names) + 1)), sharex=True, constrained_layout=True)
+    fig = Figure(figsize=(11, 2.6 * (len(names) + 1)), layout="constrained")
+    axes = fig.subplots(len(names) + 1, 2, sharex=True)
     x = result.points[0]
     for row, name in enumerate(names):
         axes[row, 0].plot(result.t, result.displacement(name) * 1e3, lw=0.6)
-        axes[row, 0].set_ylabel(f"{name} disp. (mm)")
+        axes[row, 0].set_ylabel(f"{name} displacement $w$ (mm)")
         axes[row, 1].plot(result.t, result.acceleration(name), lw=0.4)
-        axes[row, 1].set_ylabel(f"{name} acc. (m/s²)")
+        axes[row, 1].set_ylabel(f"{name} acceleration $\\ddot w$ (m/s²)")
     if result.vehicle_disp.shape[1]:
         axes[-1, 0].plot(result.t, result.car_body_disp * 1e3, lw=0.8)
         axes[-1, 1].plot(result.t, result.car_body_acc, lw=0.6)
-    axes[-1, 0].set_ylabel("car body disp. (mm)")
-    axes[-1, 1].set_ylabel("car body acc. (m/s²)")
+    axes[-1, 0].set_ylabel("car body $Z_c$ (mm)")
+    axes[-1, 1].set_ylabel("car body $\\ddot Z_c$ (m/s²)")
     for ax in axes[-1]:
-        ax.set_xlabel("t (s)")
+        ax.set_xlabel("time $t$ (s)")
     fig.suptitle(f"observation point x = {x:g} m (displacement positive down)")
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    return _finish(fig, path)
+
+
+def plot_third_octave(results: Sequence, labels: Sequence[str], layer: str = "rail", quantity: str = "acc", path=None, window: Optional[tuple] = None) -> Figure:
+    """One-third-octave band levels (IEC 61260-1, :meth:`vtb.Result.third_octave`) of a layer
+    for several runs, e.g. uncontrolled vs a damper, as stepped lines over the band edges."""
+    fig = Figure(figsize=(7, 3.8), layout="constrained")
+    ax = fig.subplots()
+    ref = None
+    for i, (res, label) in enumerate(zip(results, labels)):
+        b = res.third_octave(layer, quantity=quantity, window=window)
+        ref = b["reference"]
+        edges = np.append(b["lower"], b["upper"][-1])
+        ax.stairs(b["level"], edges, label=label, linestyle=STYLES[i % len(STYLES)], lw=1.3)
+    ax.set_xscale("log")
+    ax.set_xlabel("one-third-octave band (Hz)")
+    unit = "m/s²" if quantity == "acc" else "m"
+    ax.set_ylabel(f"{layer} {'acceleration' if quantity == 'acc' else 'displacement'} level (dB re {ref:g} {unit})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    return _finish(fig, path)
+
+
+def plot_receptance(frequencies, receptances: Sequence, labels: Sequence[str], path=None, pinned_pinned: Optional[float] = None) -> Figure:
+    """Magnitude and phase of point or transfer receptances (m/N, :func:`vtb.track.receptance`)
+    against frequency (Hz); ``pinned_pinned`` marks the first pinned–pinned frequency (Hz)."""
+    fig = Figure(figsize=(7, 5), layout="constrained")
+    mag, ph = fig.subplots(2, 1, sharex=True)
+    f = np.asarray(frequencies)
+    for i, (a, label) in enumerate(zip(receptances, labels)):
+        a = np.asarray(a)
+        mag.loglog(f, np.abs(a), STYLES[i % len(STYLES)], label=label, lw=1.2)
+        ph.semilogx(f, np.degrees(np.angle(a)), STYLES[i % len(STYLES)], lw=1.0)
+    if pinned_pinned is not None:
+        for ax in (mag, ph):
+            ax.axvline(pinned_pinned, color="k", lw=0.7, ls=":", label="pinned–pinned $f_{pp}$" if ax is mag else None)
+    mag.set_ylabel("receptance $|\\alpha|$ (m/N)")
+    ph.set_ylabel("phase (°)")
+    ph.set_xlabel("frequency $f$ (Hz)")
+    for ax in (mag, ph):
+        ax.grid(True, which="both", alpha=0.3)
+    mag.legend()
+    return _finish(fig, path)
+
+
+def plot_decay_rate(frequencies, decay_rates: Sequence, labels: Sequence[str], path=None) -> Figure:
+    """Track decay rates (dB/m, :func:`vtb.track.decay_rate`) against frequency (Hz)."""
+    fig = Figure(figsize=(7, 3.6), layout="constrained")
+    ax = fig.subplots()
+    for i, (dr, label) in enumerate(zip(decay_rates, labels)):
+        ax.loglog(frequencies, dr, STYLES[i % len(STYLES)], label=label, lw=1.2)
+    ax.set_xlabel("frequency $f$ (Hz)")
+    ax.set_ylabel("decay rate $\\Delta$ (dB/m)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    return _finish(fig, path)

@@ -40,9 +40,8 @@ ARTICLE_TABLE3_1 = dict(b_t=3.4464, k_t=1.1973e8, c_t=1750.5, rail_acc_max=840.4
 
 
 def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
+    # pyplot with the user's backend (matplotlib falls back to Agg without a display); every
+    # figure is closed once written
     import matplotlib.pyplot as plt
 
     return plt
