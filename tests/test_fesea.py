@@ -1,4 +1,4 @@
-"""The FE–SEA hybrid (model.md §6) through the public API.
+"""The FE–SEA hybrid (docs/model.md §6) through the public API.
 
 Independent checks: the local modes' frequencies and loss factors are recomputed here from the
 beam and fastener data (pinned–pinned sines on discrete springs); the displacement recovery is

@@ -1,4 +1,4 @@
-"""Irregularity spectra and generators (physics-data.md §3–4)."""
+"""Irregularity spectra and generators."""
 
 import math
 
@@ -15,7 +15,7 @@ SPECTRA = ["tbt3352", "sato", "iso3095", "german_low", "german_high", "fra1", "f
 
 def test_tbt3352_segments_are_continuous_and_published_rms():
     """Segments meet at their break frequencies to < 0.4 %, and the 2–200 m band has an RMS of
-    1.22 mm, 2–120 m 0.72 mm, 2–70 m 0.46 mm (physics-data.md §3.2)."""
+    1.22 mm, 2–120 m 0.72 mm, 2–70 m 0.46 mm."""
     for fb in irr.TBT3352_BREAKS:
         below, above = irr.psd_tbt3352(np.array([fb * (1 - 1e-12)]))[0], irr.psd_tbt3352(np.array([fb * (1 + 1e-12)]))[0]
         assert abs(below / above - 1) < 0.004
@@ -26,7 +26,7 @@ def test_tbt3352_segments_are_continuous_and_published_rms():
 
 def test_sato_unit_reading_and_rms():
     """Sato with Ω in rad/m: S_f = A/(4π²f³); A = 4.15e−8 gives 23 µm RMS over 0.01–1 m and
-    A = 5e−7 80 µm (physics-data.md §3.5)."""
+    A = 5e−7 80 µm."""
     f = np.array([1.0, 10.0])
     assert irr.psd_sato(f) == pytest.approx(4.15e-8 / (4 * math.pi**2 * f**3))
     assert math.sqrt(irr.band_variance("sato", 0.01, 1.0, sato_a=4.15e-8)) == pytest.approx(23e-6, rel=0.02)

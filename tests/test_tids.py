@@ -1,4 +1,4 @@
-"""Tuned inerter dampers (model.md §5) against independent results."""
+"""Tuned inerter dampers (docs/model.md §5) against independent results."""
 
 import math
 
@@ -31,7 +31,7 @@ def _sdof_with_tid(mu: float):
 
 @pytest.mark.parametrize("mu,published", [(0.01, 14.18), (0.05, 6.41), (0.10, 4.59), (0.20, 3.33)])
 def test_tid_on_sdof_with_fixed_slab_is_den_hartog_tmd(mu, published):
-    """physics-data.md §7: with the slab fixed, SDOF + TID = TMD of mass b; at Den Hartog's
+    """Den Hartog: with the slab fixed, SDOF + TID = TMD of mass b; at Den Hartog's
     tuning the peak |X/X_st| is sqrt(1 + 2/μ) (the table's values)."""
     cfg, w_s, k_s = _sdof_with_tid(mu)
     mats = vtb.assembled_matrices(cfg)

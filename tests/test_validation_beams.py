@@ -1,4 +1,4 @@
-"""Validation of the beam models against closed forms (physics-data.md §5a, §5b).
+"""Validation of the beam models against closed forms (Euler–Bernoulli closed forms, the Winkler beam).
 
 The simulations run through the public moving-load API; the reference values come from
 independently coded closed-form solutions and from the published anchors.
@@ -138,7 +138,7 @@ def test_moving_load_starts_as_fryba():
 
 def test_static_deflection_on_winkler_foundation_matches_hetenyi():
     """A long CHN60 rail on a continuous elastic foundation (k = 60 MN/m per 0.625 m) under a
-    70 kN load: w0 = Pβ/2k with β = (k/4EI)^¼ (0.503 mm, physics-data.md §5b), within 1 %;
+    70 kN load: w0 = Pβ/2k with β = (k/4EI)^¼ (0.503 mm, the Winkler beam), within 1 %;
     the deflection 1 m away follows Hetényi's shape e^(−βx)(cos βx + sin βx)."""
     ei, m, k, p, length = 2.059e11 * 3.217e-5, 60.64, 60e6 / 0.625, 70e3, 40.0
     beta = (k / (4 * ei)) ** 0.25

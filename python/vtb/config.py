@@ -122,7 +122,7 @@ class Discretisation(StrictFields):
     #: ``"mass"`` (the article's mass-only reading).
     fesea_coupling: Literal["full", "mass"] = _default("DiscretisationConfig", "fesea_coupling")
     #: Hybrid: add the local modes' static deflection under the rail loads to the rail's
-    #: displacement outputs (docs/fesea.md). ``False`` follows model.md §6 literally.
+    #: displacement outputs (docs/fesea.md). ``False`` follows docs/model.md §6 literally.
     local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
     #: finite-element rails: each wheel also sees the static deflection of the rail element under
     #: it with the element's nodes fixed (in series with the contact), which the element's
@@ -176,7 +176,7 @@ class Solver(StrictFields):
     t_end: Optional[float] = _default("SolverConfig", "t_end")
     end_margin: float = _default("SolverConfig", "end_margin")  #: (m)
     gravity: float = _default("SolverConfig", "gravity")  #: (m/s²)
-    contact_tol: float = _default("SolverConfig", "contact_tol")  #: |ΔP| ≤ tol·(static wheel load) per wheel and Newton update
+    contact_tol: float = _default("SolverConfig", "contact_tol")  #: per wheel |P − h(δ)| ≤ tol·(static wheel load)
     contact_max_iter: int = _default("SolverConfig", "contact_max_iter")  #: Newton iterations of the contact per step
     initial_state: Literal["static", "rest"] = _default("SolverConfig", "initial_state")
     #: memory a run may allocate (bytes); larger runs are refused up front (docs/limits.md)

@@ -9,7 +9,7 @@ Conventions
   ∫ S(f) df. Spectra published per angular wavenumber Ω = 2πf (rad/m) are converted with
   S_f(f) = 2π·S_Ω(2πf); spectra published in mm² or cm² are converted to m².
 
-Families (``physics-data.md`` §3):
+Families (their published forms; docs/model.md §4):
 
 ``tbt3352``     TB/T 3352-2014 ballastless-track vertical profile, S = A/fⁿ in mm²/(1/m),
                 four segments; its last segment is extrapolated to short wavelengths (the

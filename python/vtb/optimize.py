@@ -1,4 +1,4 @@
-"""Multi-objective TID optimisation of the article (§4.4, model.md §9).
+"""Multi-objective TID optimisation of the article (§4.4, docs/model.md §9).
 
 Objectives: the rail and slab acceleration amplitudes (a_rm, a_sm); constraints: a_rm, a_sm,
 a_rRMS and a_rst below their uncontrolled values, written normalised as X/X0 − 1 ≤ 0; bounds

@@ -96,7 +96,7 @@ class Result:
     _metrics: dict
 
     def metrics(self) -> dict[str, float]:
-        """Indices in SI units at the first observation point (model.md §8):
+        """Indices in SI units at the first observation point (docs/model.md §8):
 
         ``{layer}_disp_max`` (m), ``{layer}_acc_max`` (m/s²), ``{layer}_acc_rms`` (m/s²),
         ``{layer}_acc_settle`` (s, time after which |a| stays below 5 % of its peak) for each

@@ -1,4 +1,4 @@
-"""The TID parameter sweep of the article (§4.2–4.3, model.md §9) and its analyses.
+"""The TID parameter sweep of the article (§4.2–4.3, docs/model.md §9) and its analyses.
 
 ``vtb.sweep(config)`` runs the uncontrolled baseline and the Cartesian grid of (b_t, k_t, c_t)
 with the dampers of ``config.tids`` (default :func:`vtb.tids_around`), in parallel in Rust or

@@ -2,7 +2,7 @@
 //!
 //! Two discretisations share one representation: a layer is a list of *pieces* (intervals),
 //! each carrying a few basis functions that are, on that piece, either a cubic polynomial or
-//! a scaled sine. The modal basis (model.md §2.1) is a single piece over [0, L] with the four
+//! a scaled sine. The modal basis (docs/model.md §2.1) is a single piece over [0, L] with the four
 //! Hermite cubics and the mass-normalised sines s_n = sqrt(2/(ρAL))·sin(nπx/L); the FEM basis
 //! (§2.2) is one piece per element with the four element Hermite cubics. Every mass, stiffness
 //! and coupling integral is a product of two such functions and is evaluated in closed form,

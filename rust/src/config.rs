@@ -155,7 +155,7 @@ pub struct DiscretisationConfig {
     #[serde(default)]
     pub fesea_coupling: FeSeaCoupling,
     /// Add the local modes' static deflection to the hybrid rail's displacement outputs
-    /// (docs/fesea.md; model.md §6 leaves it out, `false` follows it).
+    /// (docs/fesea.md; docs/model.md §6 leaves it out, `false` follows it).
     #[serde(default = "default_true")]
     pub local_deflection: bool,
     /// Finite-element rails: each wheel also sees the static deflection of the rail element
@@ -178,7 +178,7 @@ pub enum FeSeaCoupling {
     /// the resonant band (docs/fesea.md).
     #[default]
     Full,
-    /// The article's reading: mass coupling only, D_gj ≈ −ω²M_gj (model.md §6).
+    /// The article's reading: mass coupling only, D_gj ≈ −ω²M_gj (docs/model.md §6).
     Mass,
 }
 
@@ -199,7 +199,7 @@ impl Default for DiscretisationConfig {
     }
 }
 
-/// Zhai's 10-DOF vertical car (model.md §3). Suspension constants are per bogie (secondary)
+/// Zhai's 10-DOF vertical car (docs/model.md §3). Suspension constants are per bogie (secondary)
 /// and per wheelset (primary), both sides lumped.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -297,8 +297,8 @@ pub struct SolverConfig {
     /// Gravitational acceleration (m/s²).
     #[serde(default = "default_gravity")]
     pub gravity: f64,
-    /// Contact iteration stops when every wheel force changes by less than
-    /// `contact_tol` × (static wheel load) in one Newton update.
+    /// Contact iteration stops when every wheel's residual |P − h(δ)| (force against the Hertz
+    /// law at its compression) is at most `contact_tol` × (static wheel load).
     #[serde(default = "default_contact_tol")]
     pub contact_tol: f64,
     #[serde(default = "default_contact_max_iter")]

@@ -1,4 +1,4 @@
-//! Nonlinear Hertz wheel–rail contact (model.md §4) and the per-step contact solve.
+//! Nonlinear Hertz wheel–rail contact (docs/model.md §4) and the per-step contact solve.
 //!
 //! P = (δ/G)^{3/2} for a compression δ > 0, P = 0 otherwise (loss of contact). Within a time
 //! step the compressions are affine in the unknown forces, δ = δ_free − A·P, where A is the
@@ -212,7 +212,7 @@ pub fn lu_solve_in_place(j: &mut [f64], b: &mut [f64], n: usize) {
 mod tests {
     use super::*;
 
-    /// physics-data.md §2: G = 4.57·R^−0.149·1e−8; R = 0.46 m → δ0 = 87.1 µm and
+    /// The Hertz constant G = 4.57·R^−0.149·1e−8; R = 0.46 m → δ0 = 87.1 µm and
     /// k_H = 1.21e9 N/m at 70 kN; R = 0.43 m → 88.0 µm, 1.19e9 N/m.
     #[test]
     fn hertz_static_compression_and_linearised_stiffness() {

@@ -1,4 +1,4 @@
-//! Spring–dashpot connections (model.md §2, article Eq. 23–26): discrete (fasteners, piers,
+//! Spring–dashpot connections (docs/model.md §2, article Eq. 23–26): discrete (fasteners, piers,
 //! bearings) and continuous (CA mortar, support layer, Winkler foundation), between two layers
 //! or between a layer and the ground.
 //!

@@ -1,4 +1,4 @@
-//! FE–SEA hybrid correction of the rail (model.md §6, article §2.2; derivations in
+//! FE–SEA hybrid correction of the rail (docs/model.md §6, article §2.2; derivations in
 //! docs/fesea.md).
 //!
 //! The rail's sine modes beyond the global set (sines N_g+1 .. N_g+N_l of the top layer) are

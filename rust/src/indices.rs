@@ -1,4 +1,4 @@
-//! Control indices of a response history (model.md §8, article §4.2–4.4).
+//! Control indices of a response history (docs/model.md §8, article §4.2–4.4).
 
 /// Amplitude max|a(t)|.
 pub fn amplitude(a: &[f64]) -> f64 {

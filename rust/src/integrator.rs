@@ -1,5 +1,5 @@
 //! Newmark average-acceleration integration (γ = ½, β = ¼) of the coupled system
-//! (model.md §7), with the Hertz contact forces iterated within each step.
+//! (docs/model.md §7), with the Hertz contact forces iterated within each step.
 //!
 //! Newmark's average acceleration is the trapezoidal rule. Written with the mean velocity of
 //! the step v̄ = (v_n + v_{n+1})/2 it reads
@@ -233,7 +233,7 @@ impl Engine {
     }
 }
 
-/// A tuned inerter damper (model.md §5): spring `stiffness` ∥ dashpot `damping` from the
+/// A tuned inerter damper (docs/model.md §5): spring `stiffness` ∥ dashpot `damping` from the
 /// `upper` point to the internal node DOF `node`, inerter `inertance` from the node to the
 /// `lower` point (shape vectors and node in the original numbering).
 #[derive(Clone, Debug)]
@@ -1127,7 +1127,7 @@ mod tests {
         a.finish()
     }
 
-    /// physics-data.md §5d: m = 1, k = 4π², u0 = 1, v0 = 0. Newmark average acceleration gives
+    /// A unit oscillator: m = 1, k = 4π², u0 = 1, v0 = 0. Newmark average acceleration gives
     /// u_n = cos(ω̄·n·Δt) with ω̄ = (2/Δt)·atan(ωΔt/2), i.e. T̄/T = (ωΔt/2)/atan(ωΔt/2)
     /// (1.00033, 1.00817, 1.03207, 1.12003 for Δt/T = 0.01, 0.05, 0.1, 0.2), with no
     /// amplitude decay.

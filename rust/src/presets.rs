@@ -3,7 +3,7 @@
 
 use crate::config::*;
 
-/// CRH3 car, parameter set A of physics-data.md §1.2 (Zeng et al., Shock Vib. 2014, Table 1):
+/// CRH3 car, parameter set A (Zeng et al., Shock Vib. 2014, Table 1):
 /// `motor = false` for the trailer, `true` for the motor car. Wheel radius 0.46 m.
 pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
     let (m_c, m_t, j_t, k_s, c_s, k_p, c_p) = if motor {

@@ -292,7 +292,7 @@ impl<const W: usize> CarRun<W> {
     }
 }
 
-/// The FE–SEA force terms of the hybrid model on the rail's cubic DOFs g1..g4 (model.md §6):
+/// The FE–SEA force terms of the hybrid model on the rail's cubic DOFs g1..g4 (docs/model.md §6):
 /// a load w at x adds w·a(x) + d/dt(w·b(x)) (`FeSea::load_terms`). The derivative is the
 /// backward difference over the step, F_{n+1} ∋ (H_{n+1} − H_n)/Δt with H = Σ_loads w·b(x), so
 /// every force sample is single-valued (Newmark's acceleration recursion stays consistent)

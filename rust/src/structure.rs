@@ -125,7 +125,7 @@ impl Structure {
         }
     }
 
-    /// Tuned inerter dampers (model.md §5): DOF `first + i` is damper i's internal node; spring
+    /// Tuned inerter dampers (docs/model.md §5): DOF `first + i` is damper i's internal node; spring
     /// and dashpot from the upper layer's point to it, inerter from it to the lower layer's
     /// point, all through the layers' shape vectors (g̃ on a hybrid rail).
     fn tid_attachments(&self, t: &TidConfig, cfg: &Config, first: usize) -> Vec<Attachment> {

@@ -1,10 +1,10 @@
-//! Zhai's 10-DOF vertical car (model.md §3).
+//! Zhai's 10-DOF vertical car (docs/model.md §3).
 //!
 //! DOFs, z positive downward, pitch positive nose-up, front at larger x:
 //! `[Z_c, β_c, Z_t1, β_t1, Z_t2, β_t2, Z_w1, Z_w2, Z_w3, Z_w4]`; bogie 1 and wheelset 1 lead.
 //! Each suspension element is a spring–dashpot acting on a relative displacement dᵀz, so
 //! K = Σ k·d·dᵀ and C = Σ c·d·dᵀ are symmetric by construction and reproduce the force
-//! equations of model.md §3 (e.g. F_s1 = K_s(Z_c − l_c·β_c − Z_t1)).
+//! equations of docs/model.md §3 (e.g. F_s1 = K_s(Z_c − l_c·β_c − Z_t1)).
 
 use crate::config::VehicleConfig;
 
@@ -196,7 +196,7 @@ mod tests {
                 assert_eq!(car.k[i][j], car.k[j][i]);
             }
         }
-        // Generalised force −K·z must equal the right-hand sides of model.md §3.
+        // Generalised force −K·z must equal the right-hand sides of docs/model.md §3.
         let z = [
             1.0e-3, 2.0e-4, -3.0e-4, 1.0e-3, 5.0e-4, -2.0e-3, 1.0e-4, -1.0e-4, 2.0e-4, 0.0,
         ];
@@ -237,7 +237,7 @@ mod tests {
         for pw in p {
             assert!((pw - want).abs() < 1e-6 * want, "{pw} vs {want}");
         }
-        // Axle load of the set A trailer: 143.2 kN (physics-data.md §1.3).
+        // Axle load of the set A trailer: 143.2 kN.
         assert!((want / 1e3 - 143.2).abs() < 0.1);
     }
 }

@@ -1,4 +1,4 @@
-//! Validation of the core against independent results (physics-data.md): closed forms,
+//! Validation of the core against independent results: closed forms,
 //! published tables and a second method. Each test names what it proves.
 
 use faer::Mat;
@@ -27,7 +27,7 @@ fn within(got: f64, want: f64, rel: f64) -> bool {
     (got - want).abs() <= rel * want
 }
 
-/// physics-data.md §1.3: set A trailer computes to 0.753, 0.835, 6.00, 7.10 Hz and Zeng et
+/// The uncoupled body-mode formulas: set A trailer computes to 0.753, 0.835, 6.00, 7.10 Hz and Zeng et
 /// al. (2014) Table 1 publishes 0.75, 0.84, 6.00, 7.10 Hz; the motor car 0.840, 0.972, 6.28,
 /// 4.78 Hz (published 0.84, 0.97, 6.28, 4.78 with the bogie labels swapped). Within 1 %.
 #[test]
@@ -60,7 +60,7 @@ fn vehicle_eigenfrequencies_match_published_table() {
                 "motor={motor}: two bogie modes near {target} Hz expected, got {bogie:?}"
             );
         }
-        // The uncoupled formulas of physics-data.md §1.3 as a second check of the body modes.
+        // The uncoupled body-mode formulas as a second check of the body modes.
         let v = crh3(motor, 30.0);
         let k_eq = v.k_s * 2.0 * v.k_p / (v.k_s + 2.0 * v.k_p);
         let f_cb = (2.0 * k_eq / v.m_c).sqrt() / (2.0 * std::f64::consts::PI);
