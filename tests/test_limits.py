@@ -36,6 +36,7 @@ def _raises_on(mutate, field, *, match=None):
         (lambda c: setattr(c.structure.layers[1], "modes", 2.5), "structure.layers[1].modes"),
         (lambda c: setattr(c.discretisation, "method", "spectral"), "discretisation.method"),
         (lambda c: setattr(c.vehicles[0], "m_c", object()), "vehicles[0].m_c"),
+        (lambda c: setattr(c, "speed", np.ones((2, 2))), "speed"),
     ],
 )
 def test_type_and_range_errors_name_their_field(mutate, field):

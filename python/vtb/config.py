@@ -258,9 +258,9 @@ class Config(StrictFields):
                 lam = irr.length
             else:
                 return None
-            w = 2.0 * math.pi * self.speed / lam
+            w = float(2.0 * math.pi * self.speed / lam)
         except (AttributeError, TypeError, ValueError, ZeroDivisionError):
-            return None
+            return None  # a bad speed or band: the core names the field
         return w if math.isfinite(w) and w > 0 else None
 
     def to_core_json(self) -> str:
