@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import vtb
+from fuzz_cases import small_config
 from vtb import comfort
 
 #: ISO 2631-1:1997 Table 3, Wk × 1000 at the nominal one-third-octave frequencies (Hz).
@@ -63,11 +64,7 @@ def test_mtvv_catches_a_one_second_burst():
 def test_short_records_warn_and_runs_report_their_car_body():
     with pytest.warns(comfort.ComfortWarning, match="20 s"):
         comfort.iso2631(np.sin(np.arange(2000) * 0.05), 1000.0)
-    cfg = vtb.paper_config()
-    for layer in cfg.structure.layers:
-        layer.modes = 8
-    cfg.structure.layers[0].local_modes = 8
-    cfg.solver.t_end = 0.2
+    cfg = small_config(t_end=0.2, tids=False)
     res = vtb.simulate(cfg)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", comfort.ComfortWarning)

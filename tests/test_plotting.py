@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import vtb
+from fuzz_cases import small_config
 
 pytest.importorskip("matplotlib")
 
@@ -24,11 +25,7 @@ def test_importing_plotting_keeps_the_users_backend(tmp_path):
 
 @pytest.fixture(scope="module")
 def runs():
-    cfg = vtb.paper_config()
-    for layer in cfg.structure.layers:
-        layer.modes = 8
-    cfg.structure.layers[0].local_modes = 8
-    cfg.solver.t_end = 0.2
+    cfg = small_config(t_end=0.2, tids=False)
     ctl = cfg.copy()
     ctl.tids = vtb.tids_around(ctl)
     return vtb.simulate(cfg), vtb.simulate(ctl)

@@ -5,15 +5,12 @@ import numpy as np
 import pytest
 
 import vtb
+from fuzz_cases import small_config
 from vtb import cli
 
 
 def _short_run():
-    cfg = vtb.paper_config()
-    for layer in cfg.structure.layers:
-        layer.modes = 8
-    cfg.structure.layers[0].local_modes = 8
-    cfg.solver.t_end = 0.05
+    cfg = small_config(t_end=0.05, tids=False)
     cfg.irregularity.scale = 30.0  # enough to lift the wheels: contact-loss periods to keep
     return cfg
 
