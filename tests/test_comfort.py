@@ -70,10 +70,45 @@ def test_short_records_warn_and_runs_report_their_car_body():
         warnings.simplefilter("ignore", comfort.ComfortWarning)
         c = res.comfort()
         w = res.comfort(window=(0.1, 0.2))
-    assert c["a_w"] > 0 and math.isnan(c["mtvv"]) and w["duration"] == pytest.approx(0.1, abs=1e-3)
+    assert c["a_w"] > 0 and c["wz"] > 0 and math.isnan(c["mtvv"]) and w["duration"] == pytest.approx(0.1, abs=1e-3)
     with pytest.raises(vtb.ConfigError) as e:
         res.comfort(car=3)
     assert e.value.field == "car"
     with pytest.raises(vtb.ConfigError) as e:
         comfort.wk_sos(100.0)
     assert e.value.field == "fs"
+
+
+#: Sperling's vertical correction factor F(f) as the standards tabulate it (0.325 f² on
+#: 0.5–5.9 Hz, 400/f² on 5.9–20 Hz, 1 above), at round frequencies (Hz).
+SPERLING_F_TABLE = {0.5: 0.08125, 1.0: 0.325, 2.0: 1.3, 4.0: 5.2, 5.0: 8.125, 6.0: 11.11, 8.0: 6.25, 10.0: 4.0, 15.0: 1.778, 20.0: 1.0, 30.0: 1.0}
+
+
+def test_sperling_correction_factor_matches_the_table():
+    f = np.array(list(SPERLING_F_TABLE))
+    assert np.allclose(comfort.sperling_f(f), list(SPERLING_F_TABLE.values()), rtol=1e-3)
+    assert comfort.sperling_f(0.3) == 0.0
+
+
+@pytest.mark.parametrize("f0", [1.0, 4.0, 8.0, 25.0])
+def test_sperling_of_a_sine_is_sperlings_displacement_formula(f0):
+    # Sperling's original form rates a harmonic displacement of z cm at f Hz as
+    # Wz = 2.7·(z³·f⁵·F(f))^(1/10); the acceleration form's 0.896 must agree with it.
+    fs, z_cm = 2000.0, 0.05 / f0
+    t = np.arange(int(10 * fs)) / fs  # a whole number of periods: one spectral line
+    a = (z_cm / 100) * (2 * math.pi * f0) ** 2 * np.sin(2 * math.pi * f0 * t)
+    expected = 2.7 * (z_cm**3 * f0**5 * float(comfort.sperling_f(f0))) ** 0.1
+    assert comfort.sperling(a, fs)["wz"] == pytest.approx(expected, rel=1e-3)
+
+
+def test_sperling_components_combine_as_a_tenth_power_sum_within_its_band():
+    fs = 2000.0
+    t = np.arange(int(10 * fs)) / fs
+    one = 0.3 * np.sin(2 * math.pi * 1.5 * t)
+    two = 0.5 * np.sin(2 * math.pi * 9.0 * t)
+    w1, w2 = (comfort.sperling(x, fs)["wz"] for x in (one, two))
+    assert comfort.sperling(one + two, fs)["wz"] == pytest.approx((w1**10 + w2**10) ** 0.1, rel=1e-9)
+    # 60 Hz lies outside the index's 0.5–40 Hz band
+    assert comfort.sperling(one + 2.0 * np.sin(2 * math.pi * 60.0 * t), fs)["wz"] == pytest.approx(w1, rel=1e-9)
+    with pytest.warns(comfort.ComfortWarning, match="5 s"):
+        comfort.sperling(one[:4000], fs)

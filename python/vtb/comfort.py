@@ -1,6 +1,6 @@
-"""Ride comfort of a car body after ISO 2631-1:1997 (docs/spectra.md): the Wk frequency
+"""Ride comfort of a car body (docs/spectra.md): after ISO 2631-1:1997 the Wk frequency
 weighting of vertical acceleration, the weighted r.m.s. a_w and the maximum transient
-vibration value MTVV.
+vibration value MTVV; and Sperling's ride index Wz for vertical vibration.
 
 Wk is the product of the standard's four analogue filters (its Annex A): a band limit
 (high pass at f1 = 0.4 Hz and low pass at f2 = 100 Hz, both Butterworth Q = 1/√2), the
@@ -34,6 +34,13 @@ WK = dict(f1=0.4, f2=100.0, f3=12.5, f4=12.5, q4=0.63, f5=2.37, q5=0.91, f6=3.35
 TAU = 1.0
 #: Record length (s) for a weighted r.m.s. that means something: ten periods of 0.5 Hz.
 MIN_RMS_RECORD = 20.0
+#: Sperling's vertical correction factor F(f): (upper band edge (Hz), F as a function of f).
+SPERLING_F = ((5.9, lambda f: 0.325 * f**2), (20.0, lambda f: 400.0 / f**2), (math.inf, lambda f: np.ones_like(f)))
+#: The frequency band (Hz) of the Sperling index.
+SPERLING_BAND = (0.5, 40.0)
+#: Record length (s) for a Sperling index: a line spacing of 0.2 Hz, five lines per hertz
+#: around the car-body modes (about 1 Hz).
+MIN_SPERLING_RECORD = 5.0
 
 
 class ComfortWarning(UserWarning):
@@ -113,3 +120,41 @@ def iso2631(a, fs: float) -> dict:
     rms = float(np.sqrt(np.mean(aw**2)))
     mtvv = float(running_rms(aw, fs).max()) if duration >= TAU else math.nan
     return dict(a_w=rms, mtvv=mtvv, mtvv_ratio=mtvv / rms if rms > 0 else math.nan, duration=duration)
+
+
+def sperling_f(f) -> np.ndarray:
+    """Sperling's correction factor F(f) for vertical vibration at ``f`` Hz (module docstring;
+    defined from 0.5 Hz up, zero below)."""
+    f = np.asarray(f, dtype=float)
+    out = np.zeros_like(f)
+    lower = SPERLING_BAND[0]
+    for upper, fn in SPERLING_F:
+        band = (f >= lower) & (f < upper)
+        out[band] = fn(f[band])
+        lower = upper
+    return out
+
+
+def sperling(a, fs: float) -> dict:
+    """Sperling's vertical ride index of an acceleration record (m/s², sampled at ``fs`` Hz):
+    ``wz`` (dimensionless; about 1 just noticeable, 2 clearly noticeable, 2.5 more pronounced but
+    not unpleasant, 3 strong, 3.25 very irregular, 3.5 extremely irregular, 4 extremely
+    unpleasant, 4.5 not passable), ``line_spacing`` (Hz) and ``duration`` (s). Warns
+    (:class:`ComfortWarning`) for records shorter than :data:`MIN_SPERLING_RECORD`."""
+    fs = _rate(fs)
+    x = _signal(a, "acceleration")
+    duration = x.size / fs
+    if duration < MIN_SPERLING_RECORD:
+        warnings.warn(
+            f"comfort: a {duration:.3g} s record resolves {1 / duration:.3g} Hz; the Sperling index needs about "
+            f"{MIN_SPERLING_RECORD:g} s (0.2 Hz lines around the car-body modes)",
+            ComfortWarning, stacklevel=2,
+        )
+    spec = np.fft.rfft(x - x.mean())
+    f = np.fft.rfftfreq(x.size, 1.0 / fs)
+    amp = 2.0 * np.abs(spec) / x.size * 100.0  # peak amplitude of each harmonic, cm/s²
+    if x.size % 2 == 0:
+        amp[-1] /= 2.0  # the Nyquist line is not doubled
+    keep = (f >= SPERLING_BAND[0]) & (f <= SPERLING_BAND[1])
+    wz10 = 0.896**10 * np.sum(amp[keep] ** 3 * sperling_f(f[keep]) / f[keep])
+    return dict(wz=float(wz10**0.1), line_spacing=fs / x.size, duration=duration)

@@ -171,10 +171,12 @@ class Result:
         return third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
 
     def comfort(self, car: int = 0, window: Optional[tuple] = None) -> dict:
-        """ISO 2631-1 ride-comfort indices of a car body's vertical acceleration (Wk-weighted
-        r.m.s. ``a_w`` and ``mtvv`` in m/s²; :func:`vtb.comfort.iso2631`), optionally over an
-        analysis ``window`` (t0, t1) in s. Short records warn (:class:`vtb.comfort.ComfortWarning`)."""
-        from .comfort import iso2631
+        """Ride-comfort indices of a car body's vertical acceleration, optionally over an
+        analysis ``window`` (t0, t1) in s: ISO 2631-1's Wk-weighted r.m.s. ``a_w`` and ``mtvv``
+        (m/s², with ``mtvv_ratio`` and ``duration`` in s; :func:`vtb.comfort.iso2631`) and
+        Sperling's ``wz`` (dimensionless; :func:`vtb.comfort.sperling`). Short records warn
+        (:class:`vtb.comfort.ComfortWarning`)."""
+        from .comfort import iso2631, sperling
 
         if isinstance(car, bool) or not isinstance(car, int) or not 0 <= car < self.vehicle_acc.shape[1]:
             raise config_error("car", car, f"must index one of the {self.vehicle_acc.shape[1]} cars")
@@ -184,7 +186,8 @@ class Result:
             if keep.sum() < 8:
                 raise config_error("window", window, f"holds fewer than 8 samples of the run [0, {t[-1]:g}] s")
             a = a[keep]
-        return iso2631(a, 1.0 / self.config.solver.dt)
+        fs = 1.0 / self.config.solver.dt
+        return {**iso2631(a, fs), "wz": sperling(a, fs)["wz"]}
 
     def save(self, path) -> None:
         """Writes the histories, metrics, contact-loss periods and the configuration that made
