@@ -4,13 +4,14 @@ value and the same choices. A field added, renamed or re-defaulted on one side o
 here."""
 
 import dataclasses
+import re
 import typing
 
 import pytest
 
 import vtb
 from vtb import config as C
-from vtb.schema import SCHEMA, properties
+from vtb.schema import SCHEMA, description, properties
 
 #: Python class → the core struct it serialises to (the two Rayleigh forms are the variants
 #: of one tagged enum).
@@ -115,3 +116,33 @@ def test_defaults_instances_serialise_to_the_cores_defaults():
     for name, cls in (("discretisation", C.Discretisation), ("solver", C.Solver), ("output", C.Output)):
         assert C._to_plain(cls()) == properties("Config")[name]["default"], name
     assert cfg.to_dict()["solver"].keys() == properties("SolverConfig").keys()
+
+
+#: How a description names its unit: an SI unit (or a combination) in parentheses, or the
+#: words for values without one.
+UNIT_TOKEN = re.compile(r"\b(m|s|kg|N|Pa|Hz|rad|bytes|count)\b|m²|m³|m⁴|−")
+NO_UNIT = re.compile(r"\bname\b|true/false|`\"|no unit")
+
+
+def _parenthesised(text):
+    return re.findall(r"\((?:[^()]|\([^()]*\))*\)", text)
+
+
+def _is_table(prop):
+    """A field holding a table (or a list of tables): documented by its own struct's fields."""
+    node = prop.get("items", prop)
+    ref = node.get("$ref") or next((a["$ref"] for a in node.get("anyOf", []) if "$ref" in a), None)
+    return ref is not None and "properties" in SCHEMA["$defs"][ref.split("/")[-1]]
+
+
+@pytest.mark.parametrize("cls,struct", PAIRS, ids=[s for _, s in PAIRS])
+def test_every_field_is_documented_with_its_unit_in_one_place(cls, struct):
+    """The core's doc comment is the one description of a field; the Python class's
+    docstring carries it (vtb.schema.documented)."""
+    for name, prop in properties(struct).items():
+        text = description(struct, name)
+        assert text, f"{struct}.{name} has no doc comment"
+        assert text in " ".join(cls.__doc__.split()), f"{cls.__name__} docstring lacks {name}"
+        if not _is_table(prop):
+            unit = any(UNIT_TOKEN.search(g) for g in _parenthesised(text)) or NO_UNIT.search(text)
+            assert unit, f"{struct}.{name}: no unit in {text!r}"

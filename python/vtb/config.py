@@ -27,6 +27,7 @@ from .errors import config_error
 from .irregularity import Irregularity
 from .schema import StrictFields
 from .schema import default as _default
+from .schema import documented
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -54,29 +55,26 @@ class RayleighCoefficients(StrictFields):
 Damping = Union[RayleighRatio, RayleighCoefficients]
 
 
+@documented("LayerConfig")
 @dataclass
 class Layer(StrictFields):
     """A beam layer (rail, slab, base, girder …): Euler–Bernoulli, or Timoshenko when
     ``shear_modulus`` and ``shear_coefficient`` are given."""
 
     name: str
-    density: float  #: ρ (kg/m³)
-    area: float  #: A (m²)
-    youngs_modulus: float  #: E (Pa)
-    inertia: float  #: I (m⁴)
-    modes: int  #: sine modes of the modal basis (4 boundary functions come on top)
+    density: float
+    area: float
+    youngs_modulus: float
+    inertia: float
+    modes: int
     damping: Damping
-    local_modes: int = _default("LayerConfig", "local_modes")  #: extra sine modes treated as local (FE–SEA) modes by the hybrid method
-    #: shear modulus G (Pa); with ``shear_coefficient`` the layer is a Timoshenko beam (shear
-    #: deformation and rotary inertia ρI), finite-element method only
+    local_modes: int = _default("LayerConfig", "local_modes")
     shear_modulus: Optional[float] = _default("LayerConfig", "shear_modulus")
-    shear_coefficient: Optional[float] = _default("LayerConfig", "shear_coefficient")  #: shear coefficient κ (−); ≈ 0.4 for a rail in vertical bending
-    #: longest finite element (m) of this layer; its nodes then fall on every discrete coupling
-    #: point of the layer (fasteners, piers, dampers). ``None``: ``discretisation.fem_elements``
-    #: equal elements, wherever the couplings fall
+    shear_coefficient: Optional[float] = _default("LayerConfig", "shear_coefficient")
     element_length: Optional[float] = _default("LayerConfig", "element_length")
 
 
+@documented("CouplingConfig")
 @dataclass
 class Coupling(StrictFields):
     """Spring–dashpot connection of layer ``upper`` to layer ``lower`` (or ``"ground"``).
@@ -99,13 +97,17 @@ class Coupling(StrictFields):
         return cls(upper, lower, "discrete", stiffness, damping, [first + i * spacing for i in range(n) if first + i * spacing <= length + 1e-9])
 
 
+@documented("StructureConfig")
 @dataclass
 class Structure(StrictFields):
-    length: float  #: common length L of all layers (m)
-    layers: list  #: list[Layer], top (wheels run on it) to bottom
-    couplings: list = _default("StructureConfig", "couplings")  #: list[Coupling]
+    """The track–bridge beam stack: layers of one common length, joined by couplings."""
+
+    length: float
+    layers: list
+    couplings: list = _default("StructureConfig", "couplings")
 
 
+@documented("DiscretisationConfig")
 @dataclass
 class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
@@ -113,45 +115,34 @@ class Discretisation(StrictFields):
 
     method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
     fem_elements: int = _default("DiscretisationConfig", "fem_elements")
-    #: FE–SEA representative excitation frequency ω_r (rad/s). ``None``: the geometric centre
-    #: 2π·v/sqrt(λ_min·λ_max) of the irregularity's excitation band (a spectrum's band, or the
-    #: wavelength of a corrugation or dip), else the geometric centre of the local modes'
-    #: frequency range (docs/fesea.md).
     omega_r: Optional[float] = _default("DiscretisationConfig", "omega_r")
-    #: FE–SEA global–local coupling: ``"full"`` (mass, bending and rail springs; default) or
-    #: ``"mass"`` (the article's mass-only reading).
     fesea_coupling: Literal["full", "mass"] = _default("DiscretisationConfig", "fesea_coupling")
-    #: Hybrid: add the local modes' static deflection under the rail loads to the rail's
-    #: displacement outputs (docs/fesea.md). ``False`` follows docs/model.md §6 literally.
     local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
-    #: finite-element rails: each wheel also sees the static deflection of the rail element under
-    #: it with the element's nodes fixed (in series with the contact), which the element's
-    #: interpolation misses; keeps the static wheel–rail stiffness independent of the wheel's
-    #: position in its element
     element_flexibility: bool = _default("DiscretisationConfig", "element_flexibility")
 
 
+@documented("VehicleConfig")
 @dataclass
 class Vehicle(StrictFields):
     """Zhai's 10-DOF car. Secondary suspension per bogie, primary per wheelset (both sides
     lumped). The modelled top layer is one of ``rails`` identical rails, so it carries
     1/``rails`` of every axle load."""
 
-    m_c: float  #: car body mass (kg)
-    j_c: float  #: car body pitch inertia (kg·m²)
-    m_t: float  #: bogie mass (kg)
-    j_t: float  #: bogie pitch inertia (kg·m²)
-    m_w: float  #: wheelset mass (kg)
-    k_s: float  #: secondary stiffness per bogie (N/m)
-    c_s: float  #: secondary damping per bogie (N·s/m)
-    k_p: float  #: primary stiffness per wheelset (N/m)
-    c_p: float  #: primary damping per wheelset (N·s/m)
-    l_c: float  #: half distance between bogie centres (m)
-    l_t: float  #: half wheelbase (m)
-    wheel_radius: float  #: (m), sets G = 4.57·R^−0.149·1e−8 m/N^(2/3)
-    x_front: float  #: position of the leading wheelset at t = 0 (m)
-    contact_constant: Optional[float] = _default("VehicleConfig", "contact_constant")  #: overrides the Hertz constant G
-    rails: int = _default("VehicleConfig", "rails")  #: identical rails sharing each axle load; the modelled one carries 1/rails
+    m_c: float
+    j_c: float
+    m_t: float
+    j_t: float
+    m_w: float
+    k_s: float
+    c_s: float
+    k_p: float
+    c_p: float
+    l_c: float
+    l_t: float
+    wheel_radius: float
+    x_front: float
+    contact_constant: Optional[float] = _default("VehicleConfig", "contact_constant")
+    rails: int = _default("VehicleConfig", "rails")
 
     @property
     def length(self) -> float:
@@ -159,35 +150,43 @@ class Vehicle(StrictFields):
         return 2.0 * (self.l_c + self.l_t)
 
 
+@documented("MovingForceConfig")
 @dataclass
 class MovingForce(StrictFields):
     """A constant force moving at the common speed (moving-load mode)."""
 
-    magnitude: float  #: N, positive downward
-    x0: float  #: position at t = 0 (m)
-    layer: Optional[str] = _default("MovingForceConfig", "layer")  #: top layer when None
+    magnitude: float
+    x0: float
+    layer: Optional[str] = _default("MovingForceConfig", "layer")
 
 
+@documented("SolverConfig")
 @dataclass
 class Solver(StrictFields):
-    dt: float = _default("SolverConfig", "dt")  #: Newmark time step (s)
-    #: end time (s), a whole number of steps; None: the step nearest to the leading wheel
-    #: reaching L − end_margin
+    """Time integration (Newmark, docs/model.md §7), the contact iteration, and how a run
+    starts and ends."""
+
+    dt: float = _default("SolverConfig", "dt")
     t_end: Optional[float] = _default("SolverConfig", "t_end")
-    end_margin: float = _default("SolverConfig", "end_margin")  #: (m)
-    gravity: float = _default("SolverConfig", "gravity")  #: (m/s²)
-    contact_tol: float = _default("SolverConfig", "contact_tol")  #: per wheel |P − h(δ)| ≤ tol·(static wheel load)
-    contact_max_iter: int = _default("SolverConfig", "contact_max_iter")  #: Newton iterations of the contact per step
+    end_margin: float = _default("SolverConfig", "end_margin")
+    gravity: float = _default("SolverConfig", "gravity")
+    contact_tol: float = _default("SolverConfig", "contact_tol")
+    contact_max_iter: int = _default("SolverConfig", "contact_max_iter")
     initial_state: Literal["static", "rest"] = _default("SolverConfig", "initial_state")
-    #: memory a run may allocate (bytes); larger runs are refused up front (docs/limits.md)
     memory_budget: float = _default("SolverConfig", "memory_budget")
+    fade_in: float = _default("SolverConfig", "fade_in")
 
 
+@documented("OutputConfig")
 @dataclass
 class Output(StrictFields):
-    points: list = _default("OutputConfig", "points")  #: observation points (m); empty: x = L/2
+    """What a run records and where its metrics are taken (docs/model.md §8)."""
+
+    points: list = _default("OutputConfig", "points")
+    window: Optional[list] = _default("OutputConfig", "window")
 
 
+@documented("TidConfig")
 @dataclass
 class TIDs(StrictFields):
     """``count`` identical tuned inerter dampers between ``upper`` and ``lower`` at
@@ -204,15 +203,16 @@ class TIDs(StrictFields):
     lower: str = _default("TidConfig", "lower")
 
 
+@documented("Config", irregularity="The track irregularity under the wheels, generated on the Python side (:class:`vtb.Irregularity`; m, positive = dip).")
 @dataclass
 class Config(StrictFields):
     """A complete run: structure, discretisation, vehicles or moving forces, speed, solver
     settings, observation points, irregularity and optional TIDs."""
 
     structure: Structure
-    speed: float  #: (m/s), +x direction
-    vehicles: list = _default("Config", "vehicles")  #: list[Vehicle]
-    forces: list = _default("Config", "forces")  #: list[MovingForce]
+    speed: float
+    vehicles: list = _default("Config", "vehicles")
+    forces: list = _default("Config", "forces")
     discretisation: Discretisation = field(default_factory=Discretisation)
     solver: Solver = field(default_factory=Solver)
     output: Output = field(default_factory=Output)

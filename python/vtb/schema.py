@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import json
 from typing import Any
 
@@ -27,6 +28,31 @@ def default(struct: str, name: str) -> Any:
     if isinstance(value, (list, dict)):
         return dataclasses.field(default_factory=lambda: copy.deepcopy(value))
     return value
+
+
+def description(struct: str, name: str) -> str:
+    """The core's doc comment of field ``struct.name`` (its meaning and unit), one paragraph."""
+    return " ".join(properties(struct)[name].get("description", "").split())
+
+
+def documented(struct: str, **python_only: str):
+    """Class decorator: appends to the docstring an ``Attributes`` section listing every field
+    with the core's description of ``struct`` (the one place a field's meaning and unit are
+    written); ``python_only`` documents the fields the core does not have."""
+
+    def decorate(cls):
+        lines = [inspect.cleandoc(cls.__doc__ or cls.__name__), "", "Attributes", "----------"]
+        for f in dataclasses.fields(cls):
+            text = python_only.get(f.name) or description(struct, f.name)
+            prop = properties(struct).get(f.name, {})
+            if "default" in prop and not isinstance(prop["default"], (dict, list)):
+                text += f" Default: ``{json.dumps(prop['default'])}``."
+            lines += [f"{f.name}", f"    {text}"]
+        cls.__doc__ = "\n".join(lines) + "\n"
+        cls.__schema_struct__ = struct
+        return cls
+
+    return decorate
 
 
 class StrictFields:

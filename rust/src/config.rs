@@ -13,7 +13,9 @@ pub const GROUND: &str = "ground";
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
+    /// The track–bridge beam stack: its length, layers and couplings.
     pub structure: StructureConfig,
+    /// How the layers are discretised (modal, hybrid FE–SEA or finite elements).
     #[serde(default)]
     pub discretisation: DiscretisationConfig,
     /// Cars of the train, all running at `speed`. Empty for the moving-load mode.
@@ -24,11 +26,13 @@ pub struct Config {
     pub forces: Vec<MovingForceConfig>,
     /// Speed of all vehicles and forces (m/s), in the +x direction.
     pub speed: f64,
+    /// Time integration, contact iteration, start and end of the run.
     #[serde(default)]
     pub solver: SolverConfig,
+    /// Observation points and the metrics' analysis window.
     #[serde(default)]
     pub output: OutputConfig,
-    /// Tuned inerter dampers between two layers (optional).
+    /// Tuned inerter dampers between two layers (optional; none by default).
     #[serde(default)]
     pub tids: Option<TidConfig>,
 }
@@ -48,6 +52,7 @@ pub struct StructureConfig {
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LayerConfig {
+    /// Name (no unit) by which couplings, dampers, outputs and metrics refer to the layer.
     pub name: String,
     /// Density ρ (kg/m³).
     pub density: f64,
@@ -57,9 +62,9 @@ pub struct LayerConfig {
     pub youngs_modulus: f64,
     /// Second moment of area I (m⁴).
     pub inertia: f64,
-    /// Number of sine modes of the modal/hybrid basis (the 4 Hermite DOFs come on top).
+    /// Number of sine modes (count) of the modal/hybrid basis (the 4 Hermite DOFs come on top).
     pub modes: usize,
-    /// Extra sine modes treated as local (FE–SEA) modes by the hybrid method.
+    /// Extra sine modes (count) treated as local (FE–SEA) modes by the hybrid method.
     #[serde(default)]
     pub local_modes: usize,
     /// Shear modulus G (Pa). Given with `shear_coefficient`, the layer is a Timoshenko beam
@@ -74,6 +79,7 @@ pub struct LayerConfig {
     /// the uniform mesh of `discretisation.fem_elements` elements.
     #[serde(default)]
     pub element_length: Option<f64>,
+    /// Rayleigh damping of the layer: a ratio (−) at two frequencies (Hz), or α (1/s) and β (s).
     pub damping: RayleighConfig,
 }
 
@@ -115,11 +121,15 @@ pub enum CouplingKind {
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingConfig {
+    /// The upper layer's name (no unit).
     pub upper: String,
-    /// A layer name, or `"ground"`.
+    /// The lower layer's name, or `"ground"` (no unit).
     pub lower: String,
+    /// `"discrete"` (point springs at `positions`) or `"continuous"` (along the whole length).
     pub kind: CouplingKind,
+    /// Stiffness (N/m per point if discrete, N/m² per unit length if continuous).
     pub stiffness: f64,
+    /// Viscous damping (N·s/m per point if discrete, N·s/m² per unit length if continuous).
     #[serde(default)]
     pub damping: f64,
     /// Point positions for discrete couplings (m).
@@ -142,25 +152,29 @@ pub enum Method {
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretisationConfig {
+    /// `"modal"`, `"hybrid"` (modal with the FE–SEA correction of the rail) or `"fem"`.
     #[serde(default)]
     pub method: Method,
-    /// Elements per layer of the FEM discretisation.
+    /// Elements per layer (count) of the uniform FEM mesh.
     #[serde(default = "default_fem_elements")]
     pub fem_elements: usize,
-    /// Representative excitation frequency ω_r (rad/s) of the FE–SEA correction; `None` uses
-    /// the documented default.
+    /// Representative excitation frequency ω_r (rad/s) of the FE–SEA correction. `None`: the
+    /// geometric centre 2π·v/√(λ_min·λ_max) of the irregularity's excitation band (a
+    /// spectrum's band, or the wavelength of a corrugation or dip), else the geometric centre
+    /// of the local modes' frequency range (docs/fesea.md).
     #[serde(default)]
     pub omega_r: Option<f64>,
-    /// Global–local coupling of the FE–SEA correction.
+    /// Global–local coupling of the FE–SEA correction: `"full"` or the article's `"mass"`.
     #[serde(default)]
     pub fesea_coupling: FeSeaCoupling,
-    /// Add the local modes' static deflection to the hybrid rail's displacement outputs
+    /// Add (true/false) the local modes' static deflection to the hybrid rail's displacement outputs
     /// (docs/fesea.md; docs/model.md §6 leaves it out, `false` follows it).
     #[serde(default = "default_true")]
     pub local_deflection: bool,
-    /// Finite-element rails: each wheel also sees the static deflection of the rail element
+    /// Finite-element rails (true/false): each wheel also sees the static deflection of the rail element
     /// under it with the element's nodes fixed (in series with the Hertz contact), which the
-    /// element's interpolation misses (docs/track-models.md).
+    /// element's interpolation misses; keeps the static wheel–rail stiffness independent of the
+    /// wheel's position in its element (docs/track-models.md).
     #[serde(default = "default_true")]
     pub element_flexibility: bool,
 }
@@ -204,22 +218,27 @@ impl Default for DiscretisationConfig {
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleConfig {
-    /// Car body mass (kg) and pitch inertia (kg·m²).
+    /// Car body mass (kg).
     pub m_c: f64,
+    /// Car body pitch inertia (kg·m²).
     pub j_c: f64,
-    /// Bogie mass (kg) and pitch inertia (kg·m²).
+    /// Bogie mass (kg).
     pub m_t: f64,
+    /// Bogie pitch inertia (kg·m²).
     pub j_t: f64,
     /// Wheelset mass (kg).
     pub m_w: f64,
-    /// Secondary suspension per bogie (N/m, N·s/m).
+    /// Secondary suspension stiffness per bogie (N/m).
     pub k_s: f64,
+    /// Secondary suspension damping per bogie (N·s/m).
     pub c_s: f64,
-    /// Primary suspension per wheelset (N/m, N·s/m).
+    /// Primary suspension stiffness per wheelset (N/m).
     pub k_p: f64,
+    /// Primary suspension damping per wheelset (N·s/m).
     pub c_p: f64,
-    /// Half distance between bogie centres and half wheelbase (m).
+    /// Half the distance between the bogie centres (m).
     pub l_c: f64,
+    /// Half the bogie wheelbase (m).
     pub l_t: f64,
     /// Wheel radius (m); sets the Hertz constant G = 4.57·R^−0.149·1e−8 m/N^(2/3).
     pub wheel_radius: f64,
@@ -228,7 +247,7 @@ pub struct VehicleConfig {
     pub contact_constant: Option<f64>,
     /// Position of the leading wheelset at t = 0 (m).
     pub x_front: f64,
-    /// Identical rails sharing each wheelset's load. The modelled top layer is one of them
+    /// Identical rails (count) sharing each wheelset's load. The modelled top layer is one of them
     /// and carries 1/`rails` of every axle load through its own Hertz spring (2: a full car
     /// on one of its two rails, which is what the article's 0.97 mm rail / 0.46 mm slab
     /// amplitudes imply).
@@ -265,7 +284,7 @@ pub struct MovingForceConfig {
     pub magnitude: f64,
     /// Position at t = 0 (m).
     pub x0: f64,
-    /// Layer the force acts on; the top layer when absent.
+    /// Name of the layer the force acts on (no unit); the top layer when absent.
     #[serde(default)]
     pub layer: Option<String>,
 }
@@ -298,17 +317,28 @@ pub struct SolverConfig {
     #[serde(default = "default_gravity")]
     pub gravity: f64,
     /// Contact iteration stops when every wheel's residual |P − h(δ)| (force against the Hertz
-    /// law at its compression) is at most `contact_tol` × (static wheel load).
+    /// law at its compression) is at most `contact_tol` (−) × (static wheel load).
     #[serde(default = "default_contact_tol")]
     pub contact_tol: f64,
+    /// Newton iterations (count) of the contact per step before a `ConvergenceError`.
     #[serde(default = "default_contact_max_iter")]
     pub contact_max_iter: usize,
+    /// `"static"`: the static equilibrium of the loaded system; `"rest"`: the structure
+    /// undeformed and at rest (docs/model.md §7).
     #[serde(default)]
     pub initial_state: InitialState,
     /// Memory a run may allocate (bytes): a run whose matrices or histories are estimated to
     /// need more is refused up front (docs/limits.md).
     #[serde(default = "default_memory_budget")]
     pub memory_budget: f64,
+    /// Distance (m) over which the irregularity under every wheel grows from zero to its full
+    /// value, a raised cosine in the distance travelled since t = 0 (docs/model.md §4): the
+    /// run starts in the static equilibrium of the smooth track, with the wheels' vertical
+    /// velocity in step with the profile. 0 applies the profile in full from t = 0; the wheels
+    /// then start at rest on a profile that moves under them at the running speed, a start-up
+    /// impact that sets the car body's maximum acceleration.
+    #[serde(default = "default_fade_in")]
+    pub fade_in: f64,
 }
 
 fn default_dt() -> f64 {
@@ -326,6 +356,10 @@ fn default_contact_tol() -> f64 {
 fn default_contact_max_iter() -> usize {
     50
 }
+fn default_fade_in() -> f64 {
+    2.0
+}
+
 fn default_memory_budget() -> f64 {
     8e9
 }
@@ -336,6 +370,7 @@ impl Default for SolverConfig {
             dt: default_dt(),
             t_end: None,
             end_margin: default_end_margin(),
+            fade_in: default_fade_in(),
             gravity: default_gravity(),
             contact_tol: default_contact_tol(),
             contact_max_iter: default_contact_max_iter(),
@@ -351,21 +386,34 @@ pub struct OutputConfig {
     /// Observation points (m); empty means x = L/2. Metrics use the first point.
     #[serde(default)]
     pub points: Vec<f64>,
+    /// Analysis window [t0, t1] (s) of the metrics: maxima, r.m.s., contact-force extremes and
+    /// contact-loss events are taken over t0 ≤ t ≤ t1 (settle times stay absolute, in s from
+    /// the start); t0 must lie within the run, a t1 past its end ends the window with the run.
+    /// Empty (the default): the whole run.
+    #[serde(default)]
+    pub window: Option<[f64; 2]>,
 }
 
 /// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TidConfig {
-    /// Inertance b_t (kg), stiffness k_t (N/m), damping c_t (N·s/m).
+    /// Inertance b_t (kg) of each damper, from its internal node to the lower layer.
     pub inertance: f64,
+    /// Spring stiffness k_t (N/m) of each damper, from the upper layer to its internal node.
     pub stiffness: f64,
+    /// Dashpot damping c_t (N·s/m) of each damper, parallel to its spring.
     pub damping: f64,
+    /// Number of dampers (count).
     pub count: usize,
+    /// Position of the first damper (m).
     pub x0: f64,
+    /// Distance between neighbouring dampers (m).
     pub spacing: f64,
+    /// The layer the springs attach to (name, no unit).
     #[serde(default = "default_tid_upper")]
     pub upper: String,
+    /// The layer the inerters attach to (name, no unit).
     #[serde(default = "default_tid_lower")]
     pub lower: String,
 }
@@ -563,6 +611,18 @@ impl Config {
         }
     }
 
+    /// The share of the irregularity under the wheels at time `t` (s): a raised cosine in the
+    /// distance travelled, v·t, over `solver.fade_in`. A stationary run (speed 0) has nothing
+    /// moving under its wheels and takes the profile in full from its static state.
+    pub fn irregularity_share(&self, t: f64) -> f64 {
+        let s = self.speed * t;
+        if self.speed == 0.0 || s >= self.solver.fade_in {
+            1.0
+        } else {
+            0.5 * (1.0 - (std::f64::consts::PI * s / self.solver.fade_in).cos())
+        }
+    }
+
     /// Observation points, defaulting to mid-length.
     pub fn observation_points(&self) -> Vec<f64> {
         if self.output.points.is_empty() {
@@ -736,6 +796,7 @@ impl Config {
             ));
         }
         positive("solver.memory_budget", sv.memory_budget)?;
+        non_negative("solver.fade_in", sv.fade_in)?;
         if let Some(t) = sv.t_end {
             positive("solver.t_end", t)?;
             let steps = t / dt;
@@ -878,6 +939,20 @@ impl Config {
                 length,
                 "the structure",
             )?;
+        }
+        if let Some([t0, t1]) = self.output.window {
+            non_negative("output.window[0]", t0)?;
+            finite("output.window[1]", t1)?;
+            let end = self.n_steps() as f64 * dt;
+            if !(t1 > t0) || t0 >= end {
+                return Err(VtbError::config(
+                    "output.window",
+                    format!("[{t0:?}, {t1:?}]"),
+                    format!(
+                        "must be an interval t0 < t1 that starts within the run [0, {end:?}] s"
+                    ),
+                ));
+            }
         }
         if !profile.values.is_empty() {
             positive("irregularity.dx", profile.dx)?;
@@ -1028,4 +1103,30 @@ fn value_at<'v>(tree: &'v serde_json::Value, path: &str) -> Option<&'v serde_jso
         }
     }
     Some(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn irregularity_share_is_a_smooth_ramp_over_the_fade_distance() {
+        let mut cfg = crate::presets::paper();
+        cfg.speed = 80.0;
+        cfg.solver.fade_in = 2.0;
+        let t_full = 2.0 / 80.0;
+        assert_eq!(cfg.irregularity_share(0.0), 0.0);
+        assert!((cfg.irregularity_share(t_full / 2.0) - 0.5).abs() < 1e-15);
+        assert_eq!(cfg.irregularity_share(t_full), 1.0);
+        assert_eq!(cfg.irregularity_share(1.0), 1.0);
+        // C¹: the slope vanishes at both ends of the ramp
+        let h = 1e-7 * t_full;
+        assert!(cfg.irregularity_share(h) < 1e-12);
+        assert!(1.0 - cfg.irregularity_share(t_full - h) < 1e-12);
+        cfg.solver.fade_in = 0.0;
+        assert_eq!(cfg.irregularity_share(0.0), 1.0);
+        cfg.solver.fade_in = 2.0;
+        cfg.speed = 0.0;
+        assert_eq!(cfg.irregularity_share(0.0), 1.0);
+    }
 }

@@ -150,7 +150,10 @@ pub fn paper() -> Config {
         forces: vec![],
         speed: 80.0,
         solver: SolverConfig::default(),
-        output: OutputConfig { points: vec![80.0] },
+        output: OutputConfig {
+            points: vec![80.0],
+            window: None,
+        },
         tids: None,
     }
 }

@@ -49,6 +49,8 @@ pub struct RunResult {
     /// Contact force on the modelled rail (N) at `[step·n_wheels + wheel]`.
     pub contact_force: Vec<f64>,
     pub contact_loss: Vec<ContactLoss>,
+    /// The metrics' analysis window (s), `output.window`.
+    pub window: Option<[f64; 2]>,
 }
 
 impl RunResult {
@@ -81,6 +83,7 @@ impl RunResult {
             n_wheels,
             contact_force: vec![0.0; len * n_wheels],
             contact_loss: Vec::new(),
+            window: cfg.output.window,
         }
     }
 
@@ -117,34 +120,61 @@ impl RunResult {
     /// `{name}_disp_max`, `{name}_acc_max`, `{name}_acc_rms`, `{name}_acc_settle` (s, 5 %
     /// rule); for the first car `car_disp_max`, `car_acc_max`, `car_acc_rms`; and
     /// `contact_force_max`, `contact_force_min`, `contact_loss_events`.
+    ///
+    /// With an analysis window ([`RunResult::window`]) every metric is taken over the steps
+    /// inside it; settle times are still counted from t = 0.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
+        let steps = self.window_steps();
+        let t0 = *steps.start() as f64 * self.dt;
         let mut m = BTreeMap::new();
         for (li, name) in self.layer_names.iter().enumerate() {
-            let d = self.layer_disp(li, 0);
-            let a = self.layer_acc(li, 0);
-            m.insert(format!("{name}_disp_max"), amplitude(&d));
-            m.insert(format!("{name}_acc_max"), amplitude(&a));
-            m.insert(format!("{name}_acc_rms"), rms(&a));
-            m.insert(format!("{name}_acc_settle"), settle_time(&a, self.dt, 0.05));
+            let d = &self.layer_disp(li, 0)[steps.clone()];
+            let a = &self.layer_acc(li, 0)[steps.clone()];
+            m.insert(format!("{name}_disp_max"), amplitude(d));
+            m.insert(format!("{name}_acc_max"), amplitude(a));
+            m.insert(format!("{name}_acc_rms"), rms(a));
+            m.insert(
+                format!("{name}_acc_settle"),
+                t0 + settle_time(a, self.dt, 0.05),
+            );
         }
         if self.n_cars > 0 {
-            let d = self.vehicle_dof_disp(0, 0);
-            let a = self.vehicle_dof_acc(0, 0);
-            m.insert("car_disp_max".into(), amplitude(&d));
-            m.insert("car_acc_max".into(), amplitude(&a));
-            m.insert("car_acc_rms".into(), rms(&a));
+            let d = &self.vehicle_dof_disp(0, 0)[steps.clone()];
+            let a = &self.vehicle_dof_acc(0, 0)[steps.clone()];
+            m.insert("car_disp_max".into(), amplitude(d));
+            m.insert("car_acc_max".into(), amplitude(a));
+            m.insert("car_acc_rms".into(), rms(a));
         }
         if self.n_wheels > 0 {
-            let (lo, hi) = self
-                .contact_force
+            let nw = self.n_wheels;
+            let (lo, hi) = self.contact_force[*steps.start() * nw..(*steps.end() + 1) * nw]
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                     (lo.min(*v), hi.max(*v))
                 });
             m.insert("contact_force_max".into(), hi);
             m.insert("contact_force_min".into(), lo);
-            m.insert("contact_loss_events".into(), self.contact_loss.len() as f64);
+            let (ta, tb) = (t0, *steps.end() as f64 * self.dt);
+            let events = self
+                .contact_loss
+                .iter()
+                .filter(|e| e.t_start <= tb && e.t_end.is_none_or(|t| t >= ta))
+                .count();
+            m.insert("contact_loss_events".into(), events as f64);
         }
         m
+    }
+
+    /// The steps inside the analysis window (all steps without one).
+    fn window_steps(&self) -> std::ops::RangeInclusive<usize> {
+        match self.window {
+            None => 0..=self.n_steps,
+            Some([t0, t1]) => {
+                // A window edge within 1e-9 steps of a sample includes it.
+                let first = ((t0 / self.dt) - 1e-9).ceil().max(0.0) as usize;
+                let last = ((t1 / self.dt) + 1e-9).floor() as usize;
+                first.min(self.n_steps)..=last.min(self.n_steps).max(first.min(self.n_steps))
+            }
+        }
     }
 }

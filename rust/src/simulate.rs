@@ -726,7 +726,9 @@ impl<'m, const W: usize> Simulation<'m, W> {
             for w in 0..N_WHEELS {
                 let x = c.car.wheel_x0[w];
                 let p0 = loads[ci * N_WHEELS + w];
-                zw[w] = st.displacement(0, x, &u0) + profile.at(x) + compression(c.car.hertz_g, p0);
+                zw[w] = st.displacement(0, x, &u0)
+                    + cfg.irregularity_share(0.0) * profile.at(x)
+                    + compression(c.car.hertz_g, p0);
             }
             let (_, z) = c.car.static_state(g, &zw);
             let mut f = c.car.gravity(g);
@@ -803,6 +805,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 break;
             }
             let t1 = (step + 1) as f64 * dt;
+            let share = self.model.cfg.irregularity_share(t1);
             self.f_next.fill(0.0);
             if let Some(rc) = self.correction.as_mut() {
                 for lane in 0..W {
@@ -852,7 +855,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     for w in 0..N_WHEELS {
                         let x = c.car.wheel_x0[w] + v * t1;
                         delta_free[lane * nw + ci * N_WHEELS + w] =
-                            wheel[lane][w] - rail[lane][w] - l.profile.at(x);
+                            wheel[lane][w] - rail[lane][w] - share * l.profile.at(x);
                     }
                 }
                 for cj in 0..ncars {
