@@ -41,7 +41,13 @@ def test_reproduce_quick(tmp_path):
     """The quick chain end to end: every figure, table and the report."""
     out = tmp_path / "rep"
     assert cli.main(["reproduce", "--out", str(out), "--quick", "--no-progress"]) == 0
-    for name in ["report.md", "fig3_histories.png", "fig5_sweep_rail.png", "fig6_sweep_slab.png", "fig7_pareto.png", "table2.csv", "table_3_3.csv", "sweep.csv"]:
+    figures = ["fig3_histories", "fig5_sweep_rail", "fig6_sweep_slab", "fig7_pareto", "fig8_histories", "fig_car_body", "fig_hypervolume", "fig_third_octave"]
+    for name in ["report.md", "table2.csv", "table_3_3.csv", "sweep.csv", "third_octave.csv"] + [f"{f}.{s}" for f in figures for s in ("png", "pdf")]:
         assert (out / name).exists(), name
     text = (out / "report.md").read_text()
     assert "article, solution 1" in text and "1005.6" in text
+    # the frequency view and one evidence paragraph per gap
+    assert "## Frequency view" in text and "![one-third-octave levels](fig_third_octave.png)" in text
+    gaps = text.split("## The gaps between vtb and the article, and the evidence")[1].split("## Run times")[0]
+    for gap in ("Rail displacement", "Slab acceleration", "Rail r.m.s. and stabilisation time", "The best sweep case", "The MOGA optimum", "Car body"):
+        assert f"**{gap}" in gaps, gap

@@ -49,3 +49,21 @@ def test_figures_have_units_and_write_pdf_svg_png(runs, tmp_path):
             assert (tmp_path / f"{name}.{suffix}").stat().st_size > 1000
     labels = [t.get_text() for t in figs["receptance"].axes[0].get_legend().get_texts()]
     assert "pinned–pinned $f_{pp}$" in labels  # reference lines have legend entries
+
+
+def test_comparison_figure_zooms_on_the_peak_and_labels_every_trace(runs, tmp_path):
+    from vtb import plotting
+
+    fig = plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], path=tmp_path / "cmp.pdf", layers=("rail", "car body"))
+    assert (tmp_path / "cmp.pdf").stat().st_size > 1000
+    main = [ax for ax in fig.axes if ax.get_ylabel()]
+    assert len(main) == 4 and all("(" in ax.get_ylabel() for ax in main)
+    insets = [c for ax in main for c in ax.child_axes if c.get_title().startswith("zoom")]
+    assert len(insets) == 2  # one per acceleration panel
+    # the inset is centred on the first run's largest |acceleration|
+    t_peak = runs[0].t[np.argmax(np.abs(runs[0].acceleration("rail")))]
+    lo, hi = insets[0].get_xlim()
+    assert lo <= t_peak <= hi
+    # the two traces differ in line style, not only in colour
+    styles = {line.get_linestyle() for line in main[0].get_lines()}
+    assert len(styles) == 2

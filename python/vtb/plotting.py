@@ -18,6 +18,11 @@ from matplotlib.figure import Figure
 STYLES = ("-", "--", "-.", ":")
 
 
+def power_of_ten(x: float) -> str:
+    """``x`` (a power of ten) as mathtext, e.g. 1e-06 → $10^{-6}$."""
+    return f"$10^{{{int(round(np.log10(x)))}}}$"
+
+
 def _finish(fig: Figure, path) -> Figure:
     if path is not None:
         fig.savefig(path, dpi=150)
@@ -57,11 +62,11 @@ def plot_third_octave(results: Sequence, labels: Sequence[str], layer: str = "ra
         b = res.third_octave(layer, quantity=quantity, window=window)
         ref = b["reference"]
         edges = np.append(b["lower"], b["upper"][-1])
-        ax.stairs(b["level"], edges, label=label, linestyle=STYLES[i % len(STYLES)], lw=1.3)
+        ax.stairs(b["level"], edges, label=label, linestyle=STYLES[i % len(STYLES)], lw=1.3, baseline=None)
     ax.set_xscale("log")
     ax.set_xlabel("one-third-octave band (Hz)")
     unit = "m/s²" if quantity == "acc" else "m"
-    ax.set_ylabel(f"{layer} {'acceleration' if quantity == 'acc' else 'displacement'} level (dB re {ref:g} {unit})")
+    ax.set_ylabel(f"{layer} {'acceleration' if quantity == 'acc' else 'displacement'} level (dB re {power_of_ten(ref)} {unit})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     return _finish(fig, path)
@@ -99,4 +104,63 @@ def plot_decay_rate(frequencies, decay_rates: Sequence, labels: Sequence[str], p
     ax.set_ylabel("decay rate $\\Delta$ (dB/m)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
+    return _finish(fig, path)
+
+
+#: Symbols of the series :func:`plot_comparison` draws: (quantity, scale to the plotted unit,
+#: axis label).
+_SERIES = {
+    "disp": (1e3, "displacement $w_\\mathrm{{{l}}}$ (mm)"),
+    "acc": (1.0, "acceleration $\\ddot w_\\mathrm{{{l}}}$ (m/s²)"),
+}
+
+
+def _series(result, layer: str, quantity: str) -> np.ndarray:
+    if layer == "car body":
+        return result.car_body_disp if quantity == "disp" else result.car_body_acc
+    return result.displacement(layer) if quantity == "disp" else result.acceleration(layer)
+
+
+def _zoom(ax, t: np.ndarray, traces: Sequence[np.ndarray], styles, half_width: float) -> None:
+    """An inset on the largest |value| of the first trace, ±``half_width`` s around it."""
+    i = int(np.argmax(np.abs(traces[0])))
+    keep = (t >= t[i] - half_width) & (t <= t[i] + half_width)
+    if keep.sum() < 4:
+        return
+    inset = ax.inset_axes([0.62, 0.55, 0.36, 0.4])
+    for y, (style, colour) in zip(traces, styles):
+        inset.plot(t[keep], y[keep], style, color=colour, lw=0.9)
+    inset.set_xlim(t[keep][0], t[keep][-1])
+    inset.tick_params(labelsize=6)
+    inset.set_title(f"zoom at $t$ = {t[i]:.3f} s", fontsize=7)
+    ax.indicate_inset_zoom(inset, edgecolor="0.4")
+
+
+def plot_comparison(results: Sequence, labels: Sequence[str], path=None, layers=("rail", "slab"), zoom: float = 0.01) -> Figure:
+    """Displacement and acceleration histories of several runs on common axes (e.g. two
+    discretisations, or uncontrolled vs a damper): one row per layer (``"car body"`` for the
+    first car body), the traces in distinct line styles and colours, the later ones
+    translucent, and on each acceleration panel an inset zooming ±``zoom`` s on the first
+    run's peak (0: none)."""
+    fig = Figure(figsize=(11, 2.7 * len(layers)), layout="constrained")
+    axes = fig.subplots(len(layers), 2, sharex=True, squeeze=False)
+    colours = [f"C{i}" for i in range(len(results))]
+    styles = list(zip((STYLES[i % len(STYLES)] for i in range(len(results))), colours))
+    t = results[0].t
+    for row, layer in enumerate(layers):
+        for col, quantity in enumerate(("disp", "acc")):
+            ax = axes[row, col]
+            scale, label = _SERIES[quantity]
+            traces = [_series(r, layer, quantity) * scale for r in results]
+            for i, (y, lab) in enumerate(zip(traces, labels)):
+                ax.plot(t, y, styles[i][0], color=colours[i], lw=0.7 if i == 0 else 0.6, alpha=1.0 if i == 0 else 0.75, label=lab)
+            if layer == "car body":
+                label = "displacement $Z_c$ (mm)" if quantity == "disp" else "acceleration $\\ddot Z_c$ (m/s²)"
+            ax.set_ylabel(f"{layer} {label.format(l=layer)}")
+            ax.grid(True, alpha=0.3)
+            if quantity == "acc" and zoom > 0:
+                _zoom(ax, t, traces, styles, zoom)
+    for ax in axes[-1]:
+        ax.set_xlabel("time $t$ (s)")
+    axes[0, 0].legend(loc="lower left", fontsize=8)
     return _finish(fig, path)
