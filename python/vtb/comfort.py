@@ -53,7 +53,7 @@ def _omegas():
 
 
 def wk(f) -> np.ndarray:
-    """|Wk(f)|: the magnitude of the ISO 2631-1 weighting at frequencies ``f`` (Hz)."""
+    """``|Wk(f)|``: the magnitude of the ISO 2631-1 weighting at frequencies ``f`` (Hz)."""
     (w, q4, q5, q6), s = _omegas(), 2j * math.pi * np.asarray(f, dtype=float)
     high = s**2 / (s**2 + math.sqrt(2) * w["f1"] * s + w["f1"] ** 2)
     low = w["f2"] ** 2 / (s**2 + math.sqrt(2) * w["f2"] * s + w["f2"] ** 2)

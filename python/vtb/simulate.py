@@ -99,7 +99,7 @@ class Result:
         """Indices in SI units at the first observation point (docs/model.md §8):
 
         ``{layer}_disp_max`` (m), ``{layer}_acc_max`` (m/s²), ``{layer}_acc_rms`` (m/s²),
-        ``{layer}_acc_settle`` (s, time after which |a| stays below 5 % of its peak) for each
+        ``{layer}_acc_settle`` (s, time after which ``|a|`` stays below 5 % of its peak) for each
         layer; ``car_disp_max`` (m), ``car_acc_max``, ``car_acc_rms`` (m/s²) of the first car
         body; ``contact_force_max``/``_min`` (N) and ``contact_loss_events``.
         """

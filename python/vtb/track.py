@@ -362,7 +362,7 @@ def decay_rate(
 ) -> np.ndarray:
     """Track decay rate (dB/m) of a layer with the EN 15461 estimator.
 
-    The estimator of EN 15461 (track decay rates from point and transfer functions) is
+    The estimator of EN 15461 (track decay rates from point and transfer functions) is::
 
         DR = 10·log10(e) / Σ_{n=0}^{N} (|A(x_n)|² / |A(x_0)|²)·Δx_n      (dB/m),
 
@@ -373,7 +373,7 @@ def decay_rate(
     and half of the single interval at the two ends. For one wave e^{−βx} the sum tends to
     ∫₀^∞ e^{−2βx} dx = 1/(2β), and DR to 20·log10(e)·β, its decay rate. With the point
     receptance as the reference, a beam's near field (which the standard also includes)
-    raises |A(x_0)| above the propagating wave's amplitude, so DR exceeds the propagating
+    raises ``|A(x_0)|`` above the propagating wave's amplitude, so DR exceeds the propagating
     wave's decay rate; for a lightly damped Euler–Bernoulli beam well above its cut-on
     frequency, by a factor near 2 (docs/track.md).
 

@@ -316,7 +316,7 @@ pub struct SolverConfig {
     /// Gravitational acceleration (m/s²).
     #[serde(default = "default_gravity")]
     pub gravity: f64,
-    /// Contact iteration stops when every wheel's residual |P − h(δ)| (force against the Hertz
+    /// Contact iteration stops when every wheel's residual `|P − h(δ)|` (force against the Hertz
     /// law at its compression) is at most `contact_tol` (−) × (static wheel load).
     #[serde(default = "default_contact_tol")]
     pub contact_tol: f64,
