@@ -203,19 +203,38 @@ class IrregularityWarning(UserWarning):
 
 @dataclass
 class Irregularity(StrictFields):
-    """Irregularity of the rail top, r(x) (m, dip positive).
+    """Irregularity of the rail top, r(x) (m, dip positive): a random profile drawn from a
+    spectrum, or a deterministic shape. Only the fields of the chosen ``kind`` are used.
 
-    ``kind``: a spectrum (``tbt3352``, ``sato``, ``iso3095``, ``german_low``, ``german_high``,
-    ``fra1``…``fra6``) or a shape (``none``, ``cosine_dip``, ``corrugation``, ``sampled``).
-
-    Random profiles use the band [``wavelength_min``, ``wavelength_max``] (m), ``method``
-    (``"ifft"`` or ``"spectral"``), ``seed`` and ``n_freq`` (spectral method), sampled every
-    ``dx`` m (default λ_min/10); ``scale`` multiplies the result (for calibration);
-    ``sato_a`` is Sato's A.
-
-    Shapes: ``cosine_dip`` uses ``depth``, ``length`` and ``position`` (start of the dip);
-    ``corrugation`` uses ``amplitude`` (peak to peak), ``wavelength`` and ``start``/``end``;
-    ``sampled`` uses ``x0``, ``dx`` and ``values`` (uniform grid, m).
+    Attributes
+    ----------
+    kind
+        A spectrum (``"tbt3352"``, ``"sato"``, ``"iso3095"``, ``"german_low"``,
+        ``"german_high"``, ``"fra1"`` … ``"fra6"``) or a shape (``"none"``, ``"cosine_dip"``,
+        ``"corrugation"``, ``"sampled"``). Default ``"none"``.
+    wavelength_min, wavelength_max
+        Band of a random profile (m). Defaults 0.01 and 1.0.
+    method
+        ``"ifft"`` (inverse FFT of the spectrum with random phases) or ``"spectral"`` (a sum of
+        ``n_freq`` harmonics).
+    seed
+        Seed (non-negative integer) of the random phases; a realisation is fixed by it.
+    dx
+        Sampling step of a generated profile (m); ``None``: λ_min/10. For ``"sampled"``: the
+        grid step of ``values``.
+    scale
+        Factor (−) on the generated profile (for calibration). Default 1.
+    n_freq
+        Number of harmonics (count) of the ``"spectral"`` method. Default 2000.
+    sato_a
+        Sato's roughness constant A (rad²; S(Ω) = A/Ω³), the level of the ``"sato"`` spectrum.
+    depth, length, position
+        ``"cosine_dip"``: depth (m), length (m) and start (m) of the dip.
+    amplitude, wavelength, start, end
+        ``"corrugation"``: peak-to-peak amplitude (m), wavelength (m), and the stretch
+        [start, end] (m) it covers.
+    x0, values
+        ``"sampled"``: position of the first sample (m) and the samples r(x0 + i·dx) (m).
     """
 
     kind: str = "none"
