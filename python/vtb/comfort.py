@@ -103,6 +103,12 @@ def running_rms(a: np.ndarray, fs: float, tau: float = TAU) -> np.ndarray:
     return np.sqrt((c[idx] - c[np.maximum(idx - n, 0)]) / n)
 
 
+def _warn_if_short(duration: float, needed: float, index: str, why: str) -> None:
+    """A :class:`ComfortWarning` for a record (s) shorter than ``index`` needs."""
+    if duration < needed:
+        warnings.warn(f"comfort: a {duration:.3g} s record is short for {index}, which needs about {needed:g} s ({why})", ComfortWarning, stacklevel=3)
+
+
 def iso2631(a, fs: float) -> dict:
     """ISO 2631-1 indices of a vertical acceleration record (m/s², sampled at ``fs`` Hz):
     ``a_w`` (Wk-weighted r.m.s., m/s²), ``mtvv`` (maximum transient vibration value, τ = 1 s,
@@ -111,12 +117,7 @@ def iso2631(a, fs: float) -> dict:
     fs = _rate(fs)
     aw = weight(a, fs)
     duration = aw.size / fs
-    if duration < MIN_RMS_RECORD:
-        warnings.warn(
-            f"comfort: a {duration:.3g} s record is short for a weighted r.m.s. (ISO 2631-1 a_w needs about "
-            f"{MIN_RMS_RECORD:g} s, ten periods of 0.5 Hz){'' if duration >= TAU else '; MTVV needs at least 1 s'}",
-            ComfortWarning, stacklevel=2,
-        )
+    _warn_if_short(duration, MIN_RMS_RECORD, "ISO 2631-1 a_w", "ten periods of 0.5 Hz" + ("" if duration >= TAU else "; MTVV needs at least 1 s"))
     rms = float(np.sqrt(np.mean(aw**2)))
     mtvv = float(running_rms(aw, fs).max()) if duration >= TAU else math.nan
     return dict(a_w=rms, mtvv=mtvv, mtvv_ratio=mtvv / rms if rms > 0 else math.nan, duration=duration)
@@ -144,12 +145,7 @@ def sperling(a, fs: float) -> dict:
     fs = _rate(fs)
     x = _signal(a, "acceleration")
     duration = x.size / fs
-    if duration < MIN_SPERLING_RECORD:
-        warnings.warn(
-            f"comfort: a {duration:.3g} s record resolves {1 / duration:.3g} Hz; the Sperling index needs about "
-            f"{MIN_SPERLING_RECORD:g} s (0.2 Hz lines around the car-body modes)",
-            ComfortWarning, stacklevel=2,
-        )
+    _warn_if_short(duration, MIN_SPERLING_RECORD, "the Sperling index", f"0.2 Hz lines around the car-body modes; this record resolves {1 / duration:.3g} Hz")
     spec = np.fft.rfft(x - x.mean())
     f = np.fft.rfftfreq(x.size, 1.0 / fs)
     amp = 2.0 * np.abs(spec) / x.size * 100.0  # peak amplitude of each harmonic, cm/s²
