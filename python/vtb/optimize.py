@@ -82,17 +82,19 @@ class OptimizationResult:
     baseline: dict
     moga: moga.Result
     config: Config
+    #: The pareto columns of the two objectives (what the trade-off choices compare).
+    objective_columns = ("rail_acc_max", "slab_acc_max")
 
     def __len__(self) -> int:
         return len(self.pareto["b_t"])
 
     def trade_offs(self, weights=(0.5, 0.5)) -> dict:
-        """Trade-off selection on (a_rm, a_sm): the knee, the point nearest the ideal, the
+        """Trade-off selection on the objectives (a_rm, a_sm): the knee, the point nearest the ideal, the
         weighted achievement-scalarising choice, and the best η_r. Returns
         ``{label: index into pareto}``."""
         if len(self) == 0:
             raise VtbError("the optimisation found no feasible solution: raise the budget (pop_size, n_gen)")
-        F = np.column_stack([self.pareto["rail_acc_max"], self.pareto["slab_acc_max"]])
+        F = np.column_stack([self.pareto[k] for k in self.objective_columns])
         return {
             "knee": moga.knee_point(F),
             "nearest to ideal": moga.min_distance_to_ideal(F),
@@ -157,6 +159,9 @@ def optimize(
     warm_start: Union[SweepResult, str, Path, None] = None,
     stop_hv: Optional[tuple] = None,
     checkpoint: Union[str, Path, None] = None,
+    samples=None,
+    speeds=None,
+    statistic: str = "mean",
     **options,
 ) -> OptimizationResult:
     """Optimises the dampers of ``config`` (default :func:`vtb.tids_around`) for (a_rm, a_sm)
@@ -178,7 +183,26 @@ def optimize(
     uninterrupted run (see :func:`vtb.moga.minimize`). It is tied to this problem — the
     algorithm, budget, options, seed, warm-start points, ``stop_hv``, and hashes of the
     configuration and of its uncontrolled metrics — and refused for another.
+
+    **Over samples and speeds** (``samples=N`` or a list of seeds, ``speeds=[...]`` in m/s;
+    docs/robust.md): every design runs on every case (the design seeds
+    :data:`vtb.robust.DESIGN_SEED0` + i at each speed; ``samples`` None: the configuration's
+    own seed), all of a generation in one batch. The objectives become the ``statistic``
+    (``"mean"``, ``"max"``, ``"pNN"``, …) over the cases of a_rm/a_rm0 and a_sm/a_sm0, each
+    against the uncontrolled run of the same case, and the constraints statistic(X/X0) − 1 ≤ 0
+    (:func:`vtb.robust.robust_objectives`); the hypervolume's reference point is (1, 1).
+    Returns a :class:`vtb.robust.RobustOptimizationResult`; ``warm_start`` must then be a
+    :class:`vtb.robust.RobustSweep` of the same cases. ``executor`` is not supported there.
     """
+    if samples is not None or speeds is not None:
+        from . import robust
+
+        if executor is not None:
+            raise config_error("executor", type(executor).__name__, "is not supported over samples and speeds (the cases of a generation run as one batch)")
+        return robust.optimize_over(
+            config, samples=samples, speeds=speeds, statistic_name=statistic, pop_size=pop_size, n_gen=n_gen, seed=seed,
+            algorithm=algorithm, threads=threads, progress=progress, warm_start=warm_start, stop_hv=stop_hv, checkpoint=checkpoint, **options,
+        )
     if config.tids is None:
         config = config.copy()
         config.tids = tids_around(config)

@@ -20,18 +20,22 @@ N: it halves when N quadruples.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
 import re
+from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 from .config import Config, TIDs
-from .errors import config_error
-from .optimize import CONSTRAINTS
+from . import moga
+from .errors import VtbError, config_error
+from .optimize import BOUNDS, CONSTRAINTS, LOG_SCALE, OptimizationResult
 from .presets import tids_around
 from .simulate import simulate_batch
-from .tid_sweep import METRICS
+from .tid_sweep import METRICS, SweepResult, case_config, config_stamp, sweep
 
 #: First seed of the samples a design is chosen on.
 DESIGN_SEED0 = 1000
@@ -87,7 +91,8 @@ def _design_tids(config: Config, design) -> TIDs:
 
 
 def cases(config: Config, samples, speeds: Optional[Sequence[float]], first: int) -> list:
-    """(speed, seed, configuration without dampers) of every case, speed-major."""
+    """(speed, seed, configuration without dampers) of every case, speed-major. ``samples``
+    None: the configuration's own seed; ``speeds`` None: its own speed."""
     if config.irregularity.kind in ("none", "sampled"):
         raise config_error("irregularity.kind", config.irregularity.kind, "samples need a random irregularity (a spectrum) to draw realisations from")
     speeds = [config.speed] if speeds is None else list(speeds)
@@ -95,13 +100,97 @@ def cases(config: Config, samples, speeds: Optional[Sequence[float]], first: int
         raise config_error("speeds", speeds, "must be a non-empty list of finite speeds > 0 (m/s)")
     out = []
     for v in speeds:
-        for s in seeds(samples, first):
+        for s in [config.irregularity.seed] if samples is None else seeds(samples, first):
             cfg = config.copy()
             cfg.speed = float(v)
             cfg.irregularity = dataclasses.replace(cfg.irregularity, seed=s)
             cfg.tids = None
             out.append((float(v), s, cfg))
     return out
+
+
+
+
+def _case_row(speed: float, seed: int, m0: Optional[dict], m1: Optional[dict], error: str = "") -> dict:
+    """One case of a design: every metric uncontrolled (``m0``) and controlled (``m1``), the
+    reduction rates and the constraint check; ``error`` (a failed run): NaN indices,
+    infeasible."""
+    row = dict(speed=float(speed), seed=int(seed), error=error)
+    if error:
+        row.update({k: math.nan for m in METRICS for k in (m, f"{m}_0")})
+        row.update({f"eta_{m}": math.nan for m in REDUCED})
+        row["feasible"] = False
+        return row
+    for m in METRICS:
+        row[f"{m}_0"], row[m] = float(m0[m]), float(m1[m])
+    for m in REDUCED:
+        row[f"eta_{m}"] = (m0[m] - m1[m]) / m0[m] if m0[m] != 0 else math.nan
+    row["feasible"] = all(m1[m] <= m0[m] for m in CONSTRAINTS)
+    return row
+
+
+def _error_text(e: BaseException) -> str:
+    return " ".join(f"{type(e).__name__}: {e}".split())
+
+
+def design_statistics(rows: list, statistic_name: str) -> dict:
+    """What a design study ranks a design by, from its case rows: per index of
+    :data:`REDUCED` the ``statistic_name`` of the relative index X/X0 over the cases
+    (``ratio_<metric>``), its mean (``mean_<metric>``) and the standard error of that mean
+    (``sem_<metric>``); ``satisfaction_rate`` (share of cases meeting every constraint); and
+    ``feasible``: the statistic of X/X0 at or below 1 for every index of
+    :data:`vtb.optimize.CONSTRAINTS` (the optimiser's G = statistic(X/X0) − 1 ≤ 0). A design
+    with a failed case has infinite ratios and is infeasible."""
+    failed = any(r["error"] for r in rows)
+    out = {}
+    for m in REDUCED:
+        ratio = np.array([1.0 - r[f"eta_{m}"] for r in rows])
+        if failed:
+            out[f"ratio_{m}"] = out[f"mean_{m}"] = math.inf
+            out[f"sem_{m}"] = math.nan
+        else:
+            out[f"ratio_{m}"] = statistic(ratio, statistic_name)
+            out[f"mean_{m}"] = float(np.mean(ratio))
+            out[f"sem_{m}"] = standard_error(ratio)
+    out["satisfaction_rate"] = float(np.mean([bool(r["feasible"]) for r in rows]))
+    out["feasible"] = not failed and all(out[f"ratio_{m}"] <= 1.0 for m in CONSTRAINTS)
+    return out
+
+
+def robust_objectives(rows: list, statistic_name: str) -> tuple:
+    """F = (statistic of a_rm/a_rm0, statistic of a_sm/a_sm0) and G = statistic(X/X0) − 1 of
+    the :data:`~vtb.optimize.CONSTRAINTS` over a design's case rows (a failed case: F = 10,
+    G = ∞, as a failed run of a single-case optimisation)."""
+    s = design_statistics(rows, statistic_name)
+    if any(r["error"] for r in rows):
+        return [10.0, 10.0], [math.inf] * len(CONSTRAINTS)
+    return [s["ratio_rail_acc_max"], s["ratio_slab_acc_max"]], [s[f"ratio_{m}"] - 1.0 for m in CONSTRAINTS]
+
+
+def _rows_table(designs: list, rows_of: list, statistic_name: str, speed: Optional[float]) -> dict:
+    """numpy columns b_t, k_t, c_t and :func:`design_statistics` of each design (the cases of
+    one ``speed`` if given)."""
+    out = {k: [] for k in ("b_t", "k_t", "c_t")}
+    for d, rows in zip(designs, rows_of):
+        sub = rows if speed is None else [r for r in rows if r["speed"] == speed]
+        if not sub:
+            raise config_error("speed", speed, f"not among the studied speeds {sorted({r['speed'] for r in rows})}")
+        for k, v in zip(("b_t", "k_t", "c_t"), d):
+            out[k].append(float(v))
+        for k, v in design_statistics(sub, statistic_name).items():
+            out.setdefault(k, []).append(v)
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def _best_of(table: dict) -> dict:
+    """The feasible design with the lowest statistic of a_rm/a_rm0 (``feasible`` False in the
+    answer when no design is feasible: then the lowest one overall)."""
+    if len(table["b_t"]) == 0:
+        raise VtbError("no design was evaluated")
+    ok = np.flatnonzero(table["feasible"])
+    pool = ok if ok.size else np.arange(len(table["b_t"]))
+    i = int(pool[np.argmin(table["ratio_rail_acc_max"][pool])])
+    return {k: (bool(v[i]) if k == "feasible" else float(v[i])) for k, v in table.items()}
 
 
 @dataclasses.dataclass
@@ -126,8 +215,8 @@ class DesignEvaluation:
         return float(np.mean([bool(r["feasible"]) for r in self.rows]))
 
     def summary(self, statistic_name: str = "mean", speed: Optional[float] = None) -> dict:
-        """Per index: ``{eta_<metric>: (statistic, mean, standard error of the mean)}`` over the
-        cases (of one ``speed`` if given), and ``satisfaction_rate``."""
+        """Per index: ``{eta_<metric>: (statistic, mean, standard error of the mean)}`` of the
+        reduction rate over the cases (of one ``speed`` if given), and ``satisfaction_rate``."""
         rows = self.rows if speed is None else [r for r in self.rows if r["speed"] == speed]
         if not rows:
             raise config_error("speed", speed, f"not among the evaluated speeds {sorted({r['speed'] for r in self.rows})}")
@@ -173,18 +262,240 @@ def evaluate_design(
     n = len(todo)
     rows = []
     for (v, s, _), r0, r1 in zip(todo, runs[:n], runs[n:]):
-        row = dict(speed=v, seed=s, error="")
         failed = next((r for r in (r0, r1) if isinstance(r, BaseException)), None)
-        if failed is not None:
-            row["error"] = f"{type(failed).__name__}: {failed}"
-            row.update({k: math.nan for m in METRICS for k in (m, f"{m}_0")})
-            row.update({f"eta_{m}": math.nan for m in REDUCED})
-            row["feasible"] = False
-        else:
-            for m in METRICS:
-                row[f"{m}_0"], row[m] = float(r0[m]), float(r1[m])
-            for m in REDUCED:
-                row[f"eta_{m}"] = (r0[m] - r1[m]) / r0[m] if r0[m] != 0 else math.nan
-            row["feasible"] = all(r1[m] <= r0[m] for m in CONSTRAINTS)
-        rows.append(row)
+        rows.append(_case_row(v, s, None, None, _error_text(failed)) if failed is not None else _case_row(v, s, r0, r1))
     return DesignEvaluation(rows, tids)
+
+
+# ---------------------------------------------------------------------------- robust sweeps
+@dataclasses.dataclass
+class RobustSweep:
+    """A TID grid swept over samples and speeds. ``sweeps``: ``[(speed, seed, SweepResult)]``,
+    one ordinary sweep per case (same grid, its own uncontrolled run); ``statistic``: the
+    default statistic of :meth:`table`; ``config``: the configuration (its dampers' count and
+    positions)."""
+
+    sweeps: list
+    statistic: str
+    config: Config
+
+    @property
+    def designs(self) -> list:
+        """The grid's (b_t, k_t, c_t), in case order."""
+        c = self.sweeps[0][2].columns
+        i = np.flatnonzero(c["case"] > 0)
+        return [(float(c["b_t"][j]), float(c["k_t"][j]), float(c["c_t"][j])) for j in i]
+
+    def _rows(self, index: int) -> list:
+        rows = []
+        for v, s, sw in self.sweeps:
+            c = sw.columns
+            j = int(np.flatnonzero(c["case"] == index + 1)[0])
+            err = c["error"][j] or next((e for e in c["error"][c["case"] == 0] if e), "")
+            m0 = {m: c[m][c["case"] == 0][0] for m in METRICS}
+            rows.append(_case_row(v, s, None, None, err) if err else _case_row(v, s, m0, {m: c[m][j] for m in METRICS}))
+        return rows
+
+    def evaluation(self, index: int) -> DesignEvaluation:
+        """Design ``index`` (into :attr:`designs`) as a :class:`DesignEvaluation`."""
+        b, k, c = self.designs[index]
+        return DesignEvaluation(self._rows(index), dataclasses.replace(self.config.tids, inertance=b, stiffness=k, damping=c))
+
+    def table(self, statistic_name: Optional[str] = None, speed: Optional[float] = None) -> dict:
+        """Per design: numpy columns b_t, k_t, c_t and :func:`design_statistics` over the cases
+        (of one ``speed`` if given), with ``statistic_name`` (default :attr:`statistic`)."""
+        n = len(self.designs)
+        return _rows_table(self.designs, [self._rows(i) for i in range(n)], statistic_name or self.statistic, speed)
+
+    def best(self, statistic_name: Optional[str] = None, speed: Optional[float] = None) -> dict:
+        """The feasible design (statistic constraints, :func:`design_statistics`) with the
+        lowest statistic of a_rm/a_rm0, with its statistics."""
+        return _best_of(self.table(statistic_name, speed))
+
+
+def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name: str = "mean",
+               out=None, threads: Optional[int] = None, progress=True) -> RobustSweep:
+    """:func:`vtb.sweep` over samples and speeds (what it calls when given ``samples`` or
+    ``speeds``): one sweep of the grid per case, each with its own uncontrolled run and, with
+    ``out`` (a directory), its own journal ``out/v<speed>_seed<seed>.csv`` so an interrupted
+    study resumes. The designs of a case share one model and run in lockstep."""
+    statistic([1.0], statistic_name)  # a bad name fails before any run
+    if config.tids is None:
+        config = config.copy()
+        config.tids = tids_around(config)
+    todo = cases(config, samples, speeds, DESIGN_SEED0)
+    n_runs = len(todo) * (1 + len(b_t) * len(k_t) * len(c_t))
+    bar, report, done = None, progress if callable(progress) else None, 0
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_runs, desc="vtb robust sweep", unit="run")
+
+    def step(d, _total):
+        nonlocal done
+        if bar is not None:
+            bar.update(d - step.last)
+        step.last = d
+        if report is not None:
+            report(done + d, n_runs)
+
+    out_dir = None if out is None else Path(out)
+    sweeps = []
+    try:
+        for v, s, cfg in todo:
+            cfg.tids = config.tids
+            step.last = 0
+            journal = None if out_dir is None else out_dir / f"v{v:g}_seed{s}.csv"
+            sw = sweep(cfg, b_t, k_t, c_t, out=journal, threads=threads, progress=step)
+            done += len(sw)
+            sweeps.append((v, s, sw))
+    finally:
+        if bar is not None:
+            bar.close()
+    return RobustSweep(sweeps, statistic_name, config)
+
+
+# ---------------------------------------------------------------------- robust optimisation
+@dataclasses.dataclass
+class RobustObjectives:
+    """A generation's evaluation over samples and speeds (picklable): X rows (b_t, k_t, c_t)
+    → :func:`robust_objectives`. Every design runs on every case, all in one batch. ``cache``
+    keeps each design's case rows."""
+
+    config: Config
+    todo: list
+    baselines: list
+    statistic: str
+    threads: Optional[int] = None
+    cache: dict = dataclasses.field(default_factory=dict)
+
+    def __call__(self, X: np.ndarray):
+        X = np.asarray(X, dtype=float)
+        configs = []
+        for x in X:
+            for _, _, cfg in self.todo:
+                c = cfg.copy()
+                c.tids = self.config.tids
+                configs.append(case_config(c, *x))
+        runs = simulate_batch(configs, threads=self.threads, on_error="return")
+        n = len(self.todo)
+        F, G = np.empty((len(X), 2)), np.empty((len(X), len(CONSTRAINTS)))
+        for i, x in enumerate(X):
+            rows = []
+            for (v, s, _), m0, r in zip(self.todo, self.baselines, runs[i * n:(i + 1) * n]):
+                rows.append(_case_row(v, s, None, None, _error_text(r)) if isinstance(r, BaseException) else _case_row(v, s, m0, r))
+            self.cache[tuple(x)] = rows
+            F[i], G[i] = robust_objectives(rows, self.statistic)
+        return F, G
+
+
+@dataclasses.dataclass
+class RobustOptimizationResult(OptimizationResult):
+    """A robust optimisation. ``pareto``: numpy columns b_t, k_t, c_t and, per index,
+    ``ratio_<metric>`` (the statistic of X/X0 over the cases), ``mean_<metric>``,
+    ``sem_<metric>`` (standard error of the mean ratio), ``eta_<metric>`` = 1 − ratio, the
+    comprehensive rail rate ``eta_r`` and ``satisfaction_rate``; ``baseline``: ``{(speed,
+    seed): uncontrolled metrics}``; ``statistic``; ``evaluated``: ``{(b_t, k_t, c_t): case
+    rows}`` of every design the optimiser ran (the per-speed optima are chosen among them)."""
+
+    statistic: str = "mean"
+    evaluated: dict = dataclasses.field(default_factory=dict)
+    objective_columns = ("ratio_rail_acc_max", "ratio_slab_acc_max")
+
+    def table(self) -> list:
+        """One row per trade-off choice: the design and its statistics."""
+        rows = []
+        for label, i in self.trade_offs().items():
+            rows.append(dict(choice=label, **{k: float(v[i]) for k, v in self.pareto.items()}))
+        return rows
+
+    def speeds(self) -> list:
+        return sorted({v for v, _ in self.baseline})
+
+    def evaluated_table(self, speed: Optional[float] = None) -> dict:
+        """:func:`design_statistics` of every evaluated design (the cases of one ``speed``)."""
+        designs = list(self.evaluated)
+        return _rows_table(designs, [self.evaluated[d] for d in designs], self.statistic, speed)
+
+    def best(self, speed: Optional[float] = None) -> dict:
+        """Among every evaluated design, the feasible one with the lowest statistic of
+        a_rm/a_rm0 over the cases (of one ``speed``: the optimal design per speed)."""
+        return _best_of(self.evaluated_table(speed))
+
+    def evaluation(self, design) -> DesignEvaluation:
+        """The case rows of an evaluated design ((b_t, k_t, c_t) or a mapping of them)."""
+        key = tuple(float(design[k]) for k in ("b_t", "k_t", "c_t")) if isinstance(design, Mapping) else tuple(map(float, design))
+        if key not in self.evaluated:
+            raise config_error("design", design, "was not evaluated by this optimisation")
+        return DesignEvaluation(self.evaluated[key], dataclasses.replace(self.config.tids, inertance=key[0], stiffness=key[1], damping=key[2]))
+
+    def histories(self, label: str = "best η_r"):
+        raise VtbError("a robust optimisation has no single case: run vtb.simulate on a case of your choice")
+
+
+def _pareto_columns(X: np.ndarray, rows_of: list, statistic_name: str) -> dict:
+    """The columns of :class:`RobustOptimizationResult` for the designs X, by rising
+    statistic of a_rm/a_rm0."""
+    stats = ("ratio", "mean", "sem")
+    if len(X):
+        pareto = _rows_table([tuple(x) for x in X], rows_of, statistic_name, None)
+    else:
+        pareto = {k: np.array([]) for k in ["b_t", "k_t", "c_t", "satisfaction_rate"] + [f"{p}_{m}" for p in stats for m in REDUCED]}
+    pareto.pop("feasible", None)
+    for m in REDUCED:
+        pareto[f"eta_{m}"] = 1.0 - pareto[f"ratio_{m}"]
+    pareto["eta_r"] = (pareto["eta_rail_acc_max"] + pareto["eta_rail_acc_rms"] + pareto["eta_rail_acc_settle"]) / 3.0
+    order = np.argsort(pareto["ratio_rail_acc_max"])
+    return {k: v[order] for k, v in pareto.items()}
+
+
+def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mean", pop_size: int, n_gen: int,
+                  seed: int, algorithm: str, threads, progress, warm_start, stop_hv, checkpoint, **options) -> RobustOptimizationResult:
+    """:func:`vtb.optimize` over samples and speeds (what it calls when given ``samples`` or
+    ``speeds``). Objectives and constraints: :func:`robust_objectives`; hypervolumes with the
+    reference point (1, 1), the uncontrolled level of both objectives. ``warm_start``: a
+    :class:`RobustSweep` of the same configuration and cases."""
+    statistic([1.0], statistic_name)
+    if config.tids is None:
+        config = config.copy()
+        config.tids = tids_around(config)
+    todo = cases(config, samples, speeds, DESIGN_SEED0)
+    runs = simulate_batch([c for _, _, c in todo], threads=threads, on_error="return")
+    for (v, s, _), r in zip(todo, runs):
+        if isinstance(r, BaseException):
+            raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
+    baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
+    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads)
+    initial = None
+    if warm_start is not None:
+        if not isinstance(warm_start, RobustSweep):
+            raise config_error("warm_start", type(warm_start).__name__, "must be a RobustSweep (vtb.sweep with samples/speeds) for an optimisation over samples and speeds")
+        if [(v, s) for v, s, _ in warm_start.sweeps] != [(v, s) for v, s, _ in todo] or config_stamp(warm_start.config) != config_stamp(config):
+            raise config_error("warm_start", "RobustSweep", "is a sweep of other samples, speeds or configuration")
+        if [sw.baseline for _, _, sw in warm_start.sweeps] != baselines:
+            raise config_error("warm_start", "RobustSweep", "its uncontrolled runs differ from this configuration's")
+        X0 = np.array(warm_start.designs).reshape(-1, 3)
+        FG = []
+        for i, x in enumerate(X0):
+            rows = warm_start._rows(i)
+            evaluate.cache[tuple(x)] = rows
+            FG.append(robust_objectives(rows, statistic_name))
+        initial = (X0, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)))
+    problem = moga.Problem(lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
+                           evaluate=evaluate, log_scale=np.array(LOG_SCALE))
+    identity = {"vtb.optimize": {
+        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
+        "baseline": hashlib.sha256(json.dumps(baselines, sort_keys=True).encode()).hexdigest(),
+        "cases": [(v, s) for v, s, _ in todo], "statistic": statistic_name,
+    }}
+    res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=(1.0, 1.0),
+                        initial=initial, stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)
+    X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
+    missing = [x for x in X if tuple(x) not in evaluate.cache]
+    if missing:
+        evaluate(np.array(missing))
+    pareto = _pareto_columns(X, [evaluate.cache[tuple(x)] for x in X], statistic_name)
+    return RobustOptimizationResult(
+        pareto=pareto, baseline={(v, s): b for (v, s, _), b in zip(todo, baselines)}, moga=res, config=config,
+        statistic=statistic_name, evaluated=dict(evaluate.cache),
+    )

@@ -146,13 +146,22 @@ class SweepResult:
 
 
 def pinned_pinned_frequency(config: Config) -> float:
-    """The rail's first pinned–pinned frequency (Hz): the Euler–Bernoulli rail between two
-    fasteners, wavelength twice the fastener spacing d, f = (π/d)²·sqrt(EI/ρA)/2π."""
+    """The rail's first pinned–pinned frequency (Hz): the rail between two fasteners, a
+    simply supported span d (the fastener spacing), wavenumber k = π/d. Euler–Bernoulli:
+    ω² = EI k⁴/ρA. A Timoshenko rail (shear modulus set) gives the lower root of
+    ρ²I/κG·ω⁴ − (ρA + ρI k²(1 + E/κG))·ω² + EI k⁴ = 0 (the Timoshenko beam's frequency
+    equation, with rotary inertia and shear); it tends to the Euler–Bernoulli value as κG → ∞ and ρI → 0."""
     rail = config.structure.layers[0]
     fast = next(c for c in config.structure.couplings if c.upper == rail.name and c.kind == "discrete")
     pos = sorted(fast.positions)
-    d = pos[1] - pos[0]
-    return (math.pi / d) ** 2 * math.sqrt(rail.youngs_modulus * rail.inertia / (rail.density * rail.area)) / (2 * math.pi)
+    k = math.pi / (pos[1] - pos[0])
+    E, I, rho, A = rail.youngs_modulus, rail.inertia, rail.density, rail.area
+    if rail.shear_modulus is None:
+        return math.sqrt(E * I * k**4 / (rho * A)) / (2 * math.pi)
+    kg = rail.shear_coefficient * rail.shear_modulus
+    a, b, c = rho * rho * I / kg, rho * A + rho * I * k * k * (1 + E / kg), E * I * k**4
+    w2 = 2 * c / (b + math.sqrt(b * b - 4 * a * c))  # the lower root, without cancellation
+    return math.sqrt(w2) / (2 * math.pi)
 
 
 def grid(b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> list:
@@ -353,8 +362,18 @@ def sweep(
     threads: Optional[int] = None,
     chunk: Optional[int] = None,
     progress: Union[bool, object] = True,
+    samples=None,
+    speeds=None,
+    statistic: str = "mean",
 ) -> SweepResult:
     """Runs the baseline (no dampers) and every (b_t, k_t, c_t) of the grid.
+
+    **Over samples and speeds** (``samples=N`` or a list of seeds, ``speeds=[...]`` in m/s;
+    docs/robust.md): the grid is swept on every case (the design seeds
+    :data:`vtb.robust.DESIGN_SEED0` + i at each speed; ``samples`` None: the configuration's
+    own seed), each case against its own uncontrolled run, and the answer is a
+    :class:`vtb.robust.RobustSweep` ranking the designs by ``statistic`` of X/X0 over the
+    cases, with the standard errors. ``out`` is then a directory holding one journal per case.
 
     ``config.tids`` gives the dampers' count and positions (default: :func:`vtb.tids_around`).
     In-process (default) the runs go to the Rust batch call on ``threads`` cores (all when
@@ -381,6 +400,12 @@ def sweep(
       unparsable stamp, a wrong header, a wrong number of fields, a value that is not a number)
       raises a :class:`ConfigError` naming ``out`` and the line number.
     """
+    if samples is not None or speeds is not None:
+        from . import robust
+
+        if executor is not None:
+            raise config_error("executor", type(executor).__name__, "is not supported over samples and speeds (each case's grid runs as one batch)")
+        return robust.sweep_over(config, b_t, k_t, c_t, samples=samples, speeds=speeds, statistic_name=statistic, out=out, threads=threads, progress=progress)
     for name, vals, low in (("b_t", b_t, 0.0), ("k_t", k_t, 0.0), ("c_t", c_t, None)):
         if len(vals) == 0:
             raise config_error(name, list(vals), "needs at least one value")
