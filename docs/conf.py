@@ -12,7 +12,7 @@ extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphin
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 # the reproduction's sweep page is folded into its report
-exclude_patterns = ["_build", "reproduction/sweep.md"]
+exclude_patterns = ["_build", "reproduction/sweep.md", "robust-study/article/sweep.md"]
 
 # Markdown pages link to each other by file name and to headings by their slugs.
 myst_heading_anchors = 3

@@ -4,7 +4,7 @@ import pytest
 
 from vtb import cli
 
-COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce", "examples"]
+COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce", "examples", "study"]
 
 
 @pytest.mark.parametrize("command", COMMANDS)

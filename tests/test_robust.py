@@ -180,3 +180,20 @@ def test_the_timoshenko_pinned_pinned_frequency_is_the_beam_equations_root():
     residual = rho**2 * I / kg * w**4 - (rho * A + rho * I * k * k * (1 + E / kg)) * w**2 + E * I * k**4
     assert abs(residual) < 1e-9 * E * I * k**4
     assert 950 < f_t < 1010  # ≈ 1 kHz, as measured on tracks with 0.64 m bays
+
+
+def test_a_resumed_robust_optimisation_runs_nothing_and_knows_every_design(tmp_path, monkeypatch):
+    cfg = _config()
+    rs = vtb.sweep(cfg, [5.0], [1e8, 2e8], [1e3], samples=2, progress=False)
+    kw = dict(samples=2, pop_size=4, n_gen=2, warm_start=rs, checkpoint=tmp_path / "r.npz", progress=False)
+    first = vtb.optimize(cfg, **kw)
+    assert len(first.evaluated) > len(rs.designs)  # the optimiser ran designs of its own
+
+    def no_runs(*a, **k):
+        raise AssertionError("a resumed, finished optimisation must not run anything")
+
+    monkeypatch.setattr(robust, "simulate_batch", no_runs)
+    again = vtb.optimize(cfg, **kw)
+    assert again.evaluated.keys() == first.evaluated.keys()
+    assert all(again.evaluated[k] == first.evaluated[k] for k in first.evaluated)
+    assert again.best() == first.best()

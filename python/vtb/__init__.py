@@ -34,7 +34,7 @@ from .simulate import Result, assembled_matrices, irregularity_profile, load, me
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
 from .track import Modes, decay_rate, modes, receptance
 from .optimize import OptimizationResult, optimize
-from .robust import DesignEvaluation, evaluate_design
+from .robust import DesignEvaluation, evaluate_design, evaluate_designs
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
@@ -42,5 +42,5 @@ __all__ = [
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
-    "receptance", "decay_rate", "modes", "Modes", "evaluate_design", "DesignEvaluation",
+    "receptance", "decay_rate", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
 ]

@@ -244,6 +244,17 @@ def cmd_reproduce(args) -> int:
     return 0
 
 
+def cmd_study(args) -> int:
+    from .study import run
+
+    require_matplotlib("vtb study")
+    check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")
+    t0 = time.perf_counter()
+    report = run(args.out, quick=args.quick, progress=not args.no_progress)
+    print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -305,6 +316,15 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match)")
     r.set_defaults(func=cmd_reproduce)
+
+    st = sub.add_parser("study", help="studies built on the article's chain")
+    kinds = st.add_subparsers(dest="study", required=True)
+    rb = kinds.add_parser("robust", help="robust damper design over irregularity samples and speeds on the converged model, and the article's conclusions re-examined (about an hour; --quick about a minute)")
+    rb.add_argument("--out", required=True, help="output directory")
+    rb.add_argument("--quick", action="store_true", help="the same stages on a short record with tiny budgets (about a minute; shows the pipeline, not findings)")
+    rb.add_argument("--no-progress", action="store_true", help="no progress bars")
+    rb.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its journals and checkpoints are reused when they match)")
+    rb.set_defaults(func=cmd_study)
     return p
 
 

@@ -23,7 +23,10 @@ import dataclasses
 import hashlib
 import json
 import math
+import os
 import re
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
 
@@ -234,6 +237,37 @@ class DesignEvaluation:
         return pd.DataFrame(self.rows)
 
 
+def evaluate_designs(
+    config: Config,
+    designs: Sequence,
+    samples: Union[int, Sequence[int]] = 8,
+    speeds: Optional[Sequence[float]] = None,
+    first_seed: int = HELD_OUT_SEED0,
+    threads: Optional[int] = None,
+    progress: bool = False,
+) -> list:
+    """:func:`evaluate_design` of several designs on the same cases, which run uncontrolled
+    once for all of them; one :class:`DesignEvaluation` per design."""
+    tids = [_design_tids(config, d) for d in designs]
+    todo = cases(config, samples, speeds, first_seed)
+    controlled = []
+    for t in tids:
+        for _, _, cfg in todo:
+            c = cfg.copy()
+            c.tids = t
+            controlled.append(c)
+    runs = simulate_batch([c for _, _, c in todo] + controlled, threads=threads, on_error="return", progress=progress)
+    n = len(todo)
+    out = []
+    for j, t in enumerate(tids):
+        rows = []
+        for (v, s, _), r0, r1 in zip(todo, runs[:n], runs[n * (j + 1):n * (j + 2)]):
+            failed = next((r for r in (r0, r1) if isinstance(r, BaseException)), None)
+            rows.append(_case_row(v, s, None, None, _error_text(failed)) if failed is not None else _case_row(v, s, r0, r1))
+        out.append(DesignEvaluation(rows, t))
+    return out
+
+
 def evaluate_design(
     config: Config,
     design,
@@ -250,21 +284,9 @@ def evaluate_design(
     seeds themselves; ``speeds`` (m/s): default the configuration's own. Each case runs
     uncontrolled and with the design, all in one batch (the samples of a speed share one
     assembled model and run in lockstep). Returns the table of every index per case and the
-    constraint-satisfaction rate (:class:`DesignEvaluation`)."""
-    tids = _design_tids(config, design)
-    todo = cases(config, samples, speeds, first_seed)
-    controlled = []
-    for _, _, cfg in todo:
-        c = cfg.copy()
-        c.tids = tids
-        controlled.append(c)
-    runs = simulate_batch([c for _, _, c in todo] + controlled, threads=threads, on_error="return", progress=progress)
-    n = len(todo)
-    rows = []
-    for (v, s, _), r0, r1 in zip(todo, runs[:n], runs[n:]):
-        failed = next((r for r in (r0, r1) if isinstance(r, BaseException)), None)
-        rows.append(_case_row(v, s, None, None, _error_text(failed)) if failed is not None else _case_row(v, s, r0, r1))
-    return DesignEvaluation(rows, tids)
+    constraint-satisfaction rate (:class:`DesignEvaluation`). Several designs on the same
+    cases: :func:`evaluate_designs`."""
+    return evaluate_designs(config, [design], samples, speeds, first_seed, threads, progress)[0]
 
 
 # ---------------------------------------------------------------------------- robust sweeps
@@ -318,37 +340,44 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
     """:func:`vtb.sweep` over samples and speeds (what it calls when given ``samples`` or
     ``speeds``): one sweep of the grid per case, each with its own uncontrolled run and, with
     ``out`` (a directory), its own journal ``out/v<speed>_seed<seed>.csv`` so an interrupted
-    study resumes. The designs of a case share one model and run in lockstep."""
+    study resumes. The designs of a case share one model and run in lockstep; the cases run
+    side by side on ``threads`` cores (default all)."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
     if config.tids is None:
         config = config.copy()
         config.tids = tids_around(config)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
     n_runs = len(todo) * (1 + len(b_t) * len(k_t) * len(c_t))
-    bar, report, done = None, progress if callable(progress) else None, 0
+    bar, report = None, progress if callable(progress) else None
     if progress is True:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_runs, desc="vtb robust sweep", unit="run")
 
-    def step(d, _total):
-        nonlocal done
-        if bar is not None:
-            bar.update(d - step.last)
-        step.last = d
-        if report is not None:
-            report(done + d, n_runs)
-
     out_dir = None if out is None else Path(out)
-    sweeps = []
+    lock = threading.Lock()
+    counts = [0] * len(todo)
+
+    def one(i: int):
+        # a case's grid is one small batch on one model: cases run side by side, one per core
+        v, s, cfg = todo[i]
+        cfg.tids = config.tids
+
+        def step(d, _total):
+            with lock:
+                if bar is not None:
+                    bar.update(d - counts[i])
+                counts[i] = d
+                if report is not None:
+                    report(sum(counts), n_runs)
+
+        journal = None if out_dir is None else out_dir / f"v{v:g}_seed{s}.csv"
+        return v, s, sweep(cfg, b_t, k_t, c_t, out=journal, threads=1, progress=step)
+
+    workers = max(1, min(len(todo), threads or os.cpu_count() or 1))
     try:
-        for v, s, cfg in todo:
-            cfg.tids = config.tids
-            step.last = 0
-            journal = None if out_dir is None else out_dir / f"v{v:g}_seed{s}.csv"
-            sw = sweep(cfg, b_t, k_t, c_t, out=journal, threads=threads, progress=step)
-            done += len(sw)
-            sweeps.append((v, s, sw))
+        with ThreadPoolExecutor(workers) as pool:
+            sweeps = list(pool.map(one, range(len(todo))))
     finally:
         if bar is not None:
             bar.close()
@@ -360,7 +389,8 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
 class RobustObjectives:
     """A generation's evaluation over samples and speeds (picklable): X rows (b_t, k_t, c_t)
     → :func:`robust_objectives`. Every design runs on every case, all in one batch. ``cache``
-    keeps each design's case rows."""
+    keeps each design's case rows; ``journal`` (a JSON-lines file) gets them appended as they
+    are computed, so a resumed optimisation knows every design its interrupted run evaluated."""
 
     config: Config
     todo: list
@@ -368,6 +398,22 @@ class RobustObjectives:
     statistic: str
     threads: Optional[int] = None
     cache: dict = dataclasses.field(default_factory=dict)
+    journal: Optional[Path] = None
+
+    def load(self, identity) -> None:
+        """Reads ``journal`` (its first line must be ``identity``) into the cache, or starts it."""
+        if self.journal.exists() and self.journal.stat().st_size:
+            lines = self.journal.read_text().splitlines()
+            if json.loads(lines[0]) != json.loads(json.dumps(identity)):
+                raise config_error("checkpoint", str(self.journal), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
+            for line in lines[1:]:
+                try:
+                    d = json.loads(line)
+                except ValueError:  # a line cut short by a kill
+                    continue
+                self.cache[tuple(d["x"])] = d["rows"]
+        else:
+            self.journal.write_text(json.dumps(identity) + "\n")
 
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
@@ -386,6 +432,9 @@ class RobustObjectives:
                 rows.append(_case_row(v, s, None, None, _error_text(r)) if isinstance(r, BaseException) else _case_row(v, s, m0, r))
             self.cache[tuple(x)] = rows
             F[i], G[i] = robust_objectives(rows, self.statistic)
+        if self.journal is not None:
+            with open(self.journal, "a") as f:
+                f.write("".join(json.dumps(dict(x=[float(v) for v in x], rows=self.cache[tuple(x)])) + "\n" for x in X))
         return F, G
 
 
@@ -454,26 +503,36 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
     """:func:`vtb.optimize` over samples and speeds (what it calls when given ``samples`` or
     ``speeds``). Objectives and constraints: :func:`robust_objectives`; hypervolumes with the
     reference point (1, 1), the uncontrolled level of both objectives. ``warm_start``: a
-    :class:`RobustSweep` of the same configuration and cases."""
+    :class:`RobustSweep` of the same configuration and cases; its uncontrolled runs are then
+    the baselines (the same deterministic runs, not repeated) and its designs the points the
+    first population is chosen from. ``checkpoint``: as :func:`vtb.optimize`, with the case rows
+    of every evaluated design kept beside it in ``<checkpoint>.designs.jsonl``."""
     statistic([1.0], statistic_name)
     if config.tids is None:
         config = config.copy()
         config.tids = tids_around(config)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
-    runs = simulate_batch([c for _, _, c in todo], threads=threads, on_error="return")
-    for (v, s, _), r in zip(todo, runs):
-        if isinstance(r, BaseException):
-            raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
-    baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
-    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads)
-    initial = None
+    if warm_start is not None and not isinstance(warm_start, RobustSweep):
+        raise config_error("warm_start", type(warm_start).__name__, "must be a RobustSweep (vtb.sweep with samples/speeds) for an optimisation over samples and speeds")
     if warm_start is not None:
-        if not isinstance(warm_start, RobustSweep):
-            raise config_error("warm_start", type(warm_start).__name__, "must be a RobustSweep (vtb.sweep with samples/speeds) for an optimisation over samples and speeds")
         if [(v, s) for v, s, _ in warm_start.sweeps] != [(v, s) for v, s, _ in todo] or config_stamp(warm_start.config) != config_stamp(config):
             raise config_error("warm_start", "RobustSweep", "is a sweep of other samples, speeds or configuration")
-        if [sw.baseline for _, _, sw in warm_start.sweeps] != baselines:
-            raise config_error("warm_start", "RobustSweep", "its uncontrolled runs differ from this configuration's")
+        baselines = [sw.baseline for _, _, sw in warm_start.sweeps]  # the same deterministic runs: not repeated
+    else:
+        runs = simulate_batch([c for _, _, c in todo], threads=threads, on_error="return")
+        for (v, s, _), r in zip(todo, runs):
+            if isinstance(r, BaseException):
+                raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
+        baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
+    identity = {"vtb.optimize": {
+        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
+        "baseline": hashlib.sha256(json.dumps(baselines, sort_keys=True).encode()).hexdigest(),
+        "cases": [(v, s) for v, s, _ in todo], "statistic": statistic_name,
+    }}
+    journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
+    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, journal=journal)
+    initial = None
+    if warm_start is not None:
         X0 = np.array(warm_start.designs).reshape(-1, 3)
         FG = []
         for i, x in enumerate(X0):
@@ -481,13 +540,10 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
             evaluate.cache[tuple(x)] = rows
             FG.append(robust_objectives(rows, statistic_name))
         initial = (X0, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)))
+    if journal is not None:
+        evaluate.load(identity)
     problem = moga.Problem(lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
                            evaluate=evaluate, log_scale=np.array(LOG_SCALE))
-    identity = {"vtb.optimize": {
-        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
-        "baseline": hashlib.sha256(json.dumps(baselines, sort_keys=True).encode()).hexdigest(),
-        "cases": [(v, s) for v, s, _ in todo], "statistic": statistic_name,
-    }}
     res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=(1.0, 1.0),
                         initial=initial, stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)
     X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
