@@ -22,23 +22,21 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import contextlib
 import math
-import os
 import re
-import threading
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from . import moga, tid_sweep
 from .config import Config, TIDs
-from . import moga
 from .errors import VtbError, config_error
 from .optimize import BOUNDS, CONSTRAINTS, LOG_SCALE, OptimizationResult
 from .presets import tids_around
 from .simulate import simulate_batch
-from .tid_sweep import METRICS, SweepResult, case_config, config_stamp, sweep
+from .tid_sweep import METRICS, case_config, config_stamp
 
 #: First seed of the samples a design is chosen on.
 DESIGN_SEED0 = 1000
@@ -338,50 +336,54 @@ class RobustSweep:
 def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name: str = "mean",
                out=None, threads: Optional[int] = None, progress=True) -> RobustSweep:
     """:func:`vtb.sweep` over samples and speeds (what it calls when given ``samples`` or
-    ``speeds``): one sweep of the grid per case, each with its own uncontrolled run and, with
-    ``out`` (a directory), its own journal ``out/v<speed>_seed<seed>.csv`` so an interrupted
-    study resumes. The designs of a case share one model and run in lockstep; the cases run
-    side by side on ``threads`` cores (default all)."""
+    ``speeds``): the grid and an uncontrolled run on every case and, with ``out`` (a
+    directory), one journal per case, ``out/v<speed>_seed<seed>.csv``, so an interrupted study
+    resumes. The cases of one speed run as one batch: their uncontrolled runs share one model,
+    their controlled runs another, and each runs in lockstep groups on every core."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
-    if config.tids is None:
-        config = config.copy()
-        config.tids = tids_around(config)
+    config, grid_cases = tid_sweep.plan(config, b_t, k_t, c_t)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
-    n_runs = len(todo) * (1 + len(b_t) * len(k_t) * len(c_t))
-    bar, report = None, progress if callable(progress) else None
-    if progress is True:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=n_runs, desc="vtb robust sweep", unit="run")
-
     out_dir = None if out is None else Path(out)
-    lock = threading.Lock()
-    counts = [0] * len(todo)
+    bar, report = None, progress if callable(progress) else None
+    with contextlib.ExitStack() as stack:
+        state = []  # [speed, seed, case config, journal, rows, cases to run]
+        for v, s, cfg in todo:
+            cfg.tids = config.tids
+            journal, known = None, {}
+            if out_dir is not None:
+                out_dir.mkdir(parents=True, exist_ok=True)
+                journal = out_dir / f"v{v:g}_seed{s}.csv"
+                stack.enter_context(tid_sweep._journal_lock(journal))
+                known = tid_sweep._open_journal(journal, cfg)
+            rows, left = tid_sweep.reuse(known, grid_cases)
+            state.append([v, s, cfg, journal, rows, left])
+        total = len(todo) * len(grid_cases)
+        done = total - sum(len(st[5]) for st in state)
+        if progress is True:
+            from tqdm.auto import tqdm
 
-    def one(i: int):
-        # a case's grid is one small batch on one model: cases run side by side, one per core
-        v, s, cfg = todo[i]
-        cfg.tids = config.tids
+            bar = stack.enter_context(tqdm(total=total, initial=done, desc="vtb robust sweep", unit="run"))
+        for v in dict.fromkeys(st[0] for st in state):
+            group = [st for st in state if st[0] == v and st[5]]
+            jobs = [(st, case) for st in group for case in st[5]]
+            if not jobs:
+                continue
 
-        def step(d, _total):
-            with lock:
+            def step(d, base=done):
                 if bar is not None:
-                    bar.update(d - counts[i])
-                counts[i] = d
+                    bar.update(base + d - bar.n)
                 if report is not None:
-                    report(sum(counts), n_runs)
+                    report(base + d, total)
 
-        journal = None if out_dir is None else out_dir / f"v{v:g}_seed{s}.csv"
-        return v, s, sweep(cfg, b_t, k_t, c_t, out=journal, threads=1, progress=step)
-
-    workers = max(1, min(len(todo), threads or os.cpu_count() or 1))
-    try:
-        with ThreadPoolExecutor(workers) as pool:
-            sweeps = list(pool.map(one, range(len(todo))))
-    finally:
-        if bar is not None:
-            bar.close()
-    return RobustSweep(sweeps, statistic_name, config)
+            results = simulate_batch([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], threads=threads, on_error="return", progress=step)
+            new = tid_sweep.case_rows([case for _, case in jobs], results)
+            for st in group:
+                mine = [r for (owner, _), r in zip(jobs, new) if owner is st]
+                if st[3] is not None:
+                    tid_sweep._append_rows(st[3], mine)
+                st[4].extend(mine)
+            done += len(jobs)
+    return RobustSweep([(v, s, tid_sweep._result(rows, cfg)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
 
 
 # ---------------------------------------------------------------------- robust optimisation
@@ -459,6 +461,7 @@ class RobustOptimizationResult(OptimizationResult):
         return rows
 
     def speeds(self) -> list:
+        """The speeds of the cases (m/s)."""
         return sorted({v for v, _ in self.baseline})
 
     def evaluated_table(self, speed: Optional[float] = None) -> dict:

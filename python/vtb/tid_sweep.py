@@ -179,9 +179,8 @@ def case_config(config: Config, b: float, k: float, c: float) -> Config:
     return cfg
 
 
-def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
-    """Runs cases [(case, b, k, c)] and returns their rows (picklable: executor workers)."""
-    results = simulate_batch([case_config(config, b, k, c) for _, b, k, c in cases], threads=threads, on_error="return")
+def case_rows(cases: list, results: list) -> list:
+    """The journal rows of cases [(case, b, k, c)] from their runs (metrics or exceptions)."""
     rows = []
     for (case, b, k, c), r in zip(cases, results):
         row = {"case": case, "b_t": b, "k_t": k, "c_t": c}
@@ -191,6 +190,42 @@ def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
             row.update({m: float(r[m]) for m in METRICS}, error="")
         rows.append(row)
     return rows
+
+
+def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
+    """Runs cases [(case, b, k, c)] and returns their rows (picklable: executor workers)."""
+    return case_rows(cases, simulate_batch([case_config(config, b, k, c) for _, b, k, c in cases], threads=threads, on_error="return"))
+
+
+def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> tuple:
+    """The swept configuration (dampers default :func:`vtb.tids_around`) and its cases, the
+    baseline (case 0, NaN parameters) and the grid; a bad grid value raises a
+    :class:`ConfigError` naming b_t, k_t or c_t before any run."""
+    for name, vals, low in (("b_t", b_t, 0.0), ("k_t", k_t, 0.0), ("c_t", c_t, None)):
+        if len(vals) == 0:
+            raise config_error(name, list(vals), "needs at least one value")
+        for v in vals:
+            ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and (v >= 0 if low is None else v > low)
+            if not ok:
+                raise config_error(name, v, "must be finite and " + ("non-negative" if low is None else "positive"))
+    if config.tids is None:
+        config = config.copy()
+        config.tids = tids_around(config)
+    cases = [(0, math.nan, math.nan, math.nan)] + grid(b_t, k_t, c_t)
+    for _, b, k, c in cases[1:2]:
+        case_config(config, b, k, c).validate()
+    return config, cases
+
+
+def reuse(known: dict, cases: list) -> tuple:
+    """The successful journal rows of ``cases`` (renumbered) and the cases still to run."""
+    rows = []
+    for case, b, k, c in cases:
+        row = known.get(_key(b, k, c))
+        if row is not None and not row["error"]:
+            rows.append(dict(row, case=case))
+    reused = {r["case"] for r in rows}
+    return rows, [c for c in cases if c[0] not in reused]
 
 
 def config_stamp(config: Config) -> str:
@@ -406,34 +441,14 @@ def sweep(
         if executor is not None:
             raise config_error("executor", type(executor).__name__, "is not supported over samples and speeds (each case's grid runs as one batch)")
         return robust.sweep_over(config, b_t, k_t, c_t, samples=samples, speeds=speeds, statistic_name=statistic, out=out, threads=threads, progress=progress)
-    for name, vals, low in (("b_t", b_t, 0.0), ("k_t", k_t, 0.0), ("c_t", c_t, None)):
-        if len(vals) == 0:
-            raise config_error(name, list(vals), "needs at least one value")
-        for v in vals:
-            ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and (v >= 0 if low is None else v > low)
-            if not ok:
-                raise config_error(name, v, "must be finite and " + ("non-negative" if low is None else "positive"))
-    if config.tids is None:
-        config = config.copy()
-        config.tids = tids_around(config)
-    cases = [(0, math.nan, math.nan, math.nan)] + grid(b_t, k_t, c_t)
-    # Validate one controlled case up front so that a bad grid fails before any run.
-    for _, b, k, c in cases[1:2]:
-        case_config(config, b, k, c).validate()
+    config, cases = plan(config, b_t, k_t, c_t)
     journal = None
     if out is not None:
         out = Path(out)
         journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
         journal.parent.mkdir(parents=True, exist_ok=True)
     with _journal_lock(journal) if journal is not None else contextlib.nullcontext():
-        known = _open_journal(journal, config) if journal is not None else {}
-        rows = []
-        for case, b, k, c in cases:
-            row = known.get(_key(b, k, c))
-            if row is not None and not row["error"]:
-                rows.append(dict(row, case=case))
-        reused = {r["case"] for r in rows}
-        todo = [c for c in cases if c[0] not in reused]
+        rows, todo = reuse(_open_journal(journal, config) if journal is not None else {}, cases)
         total, done = len(cases), len(rows)
         bar, report = None, None
         if progress is True:
