@@ -36,6 +36,25 @@ LOG_SCALE = (False, True, True)
 CONSTRAINTS = ("rail_acc_max", "slab_acc_max", "rail_acc_rms", "rail_acc_settle")
 
 
+def tid_problem(evaluate) -> moga.Problem:
+    """The optimisation problem over (b_t, k_t, c_t) within :data:`BOUNDS`: two objectives and
+    the :data:`CONSTRAINTS`, evaluated a generation at a time by ``evaluate``."""
+    return moga.Problem(
+        lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
+        evaluate=evaluate, log_scale=np.array(LOG_SCALE),
+    )
+
+
+def checkpoint_identity(config: Config, baseline, **extra) -> dict:
+    """What an optimisation's evaluations depend on, hashed, for its checkpoint: the
+    configuration, its uncontrolled metrics (``baseline``) and any ``extra`` JSON values."""
+    return {"vtb.optimize": {
+        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
+        "baseline": hashlib.sha256(json.dumps(baseline, sort_keys=True).encode()).hexdigest(),
+        **extra,
+    }}
+
+
 def objectives(metrics: dict, baseline: dict) -> tuple:
     """F = (a_rm, a_sm) and G = X/X0 − 1 of the :data:`CONSTRAINTS` for one run's metrics."""
     F = [metrics["rail_acc_max"], metrics["slab_acc_max"]]
@@ -215,14 +234,8 @@ def optimize(
         X0, F0, G0, metrics = warm_start_points(warm_start, config, baseline)
         evaluate.cache.update(zip(map(tuple, X0), metrics))
         initial = (X0, F0, G0)
-    problem = moga.Problem(
-        lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
-        evaluate=evaluate, log_scale=np.array(LOG_SCALE),
-    )
-    identity = {"vtb.optimize": {  # what the evaluations depend on, hashed
-        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
-        "baseline": hashlib.sha256(json.dumps(baseline, sort_keys=True).encode()).hexdigest(),
-    }}
+    problem = tid_problem(evaluate)
+    identity = checkpoint_identity(config, baseline)
     res = moga.minimize(
         problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor,
         hv_ref=(baseline["rail_acc_max"], baseline["slab_acc_max"]), initial=initial, stop_hv=stop_hv,

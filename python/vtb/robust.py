@@ -20,7 +20,6 @@ N: it halves when N quadruples.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import contextlib
 import math
@@ -33,7 +32,7 @@ import numpy as np
 from . import moga, tid_sweep
 from .config import Config, TIDs
 from .errors import VtbError, config_error
-from .optimize import BOUNDS, CONSTRAINTS, LOG_SCALE, OptimizationResult
+from .optimize import CONSTRAINTS, OptimizationResult, checkpoint_identity, tid_problem
 from .presets import tids_around
 from .simulate import simulate_batch
 from .tid_sweep import METRICS, case_config, config_stamp
@@ -132,6 +131,12 @@ def _case_row(speed: float, seed: int, m0: Optional[dict], m1: Optional[dict], e
 
 def _error_text(e: BaseException) -> str:
     return " ".join(f"{type(e).__name__}: {e}".split())
+
+
+def _run_row(speed: float, seed: int, r0, r1) -> dict:
+    """:func:`_case_row` of two runs' metrics, either of which may be the exception of a failed run."""
+    failed = next((r for r in (r0, r1) if isinstance(r, BaseException)), None)
+    return _case_row(speed, seed, None, None, _error_text(failed)) if failed is not None else _case_row(speed, seed, r0, r1)
 
 
 def design_statistics(rows: list, statistic_name: str) -> dict:
@@ -260,8 +265,7 @@ def evaluate_designs(
     for j, t in enumerate(tids):
         rows = []
         for (v, s, _), r0, r1 in zip(todo, runs[:n], runs[n * (j + 1):n * (j + 2)]):
-            failed = next((r for r in (r0, r1) if isinstance(r, BaseException)), None)
-            rows.append(_case_row(v, s, None, None, _error_text(failed)) if failed is not None else _case_row(v, s, r0, r1))
+            rows.append(_run_row(v, s, r0, r1))
         out.append(DesignEvaluation(rows, t))
     return out
 
@@ -431,7 +435,7 @@ class RobustObjectives:
         for i, x in enumerate(X):
             rows = []
             for (v, s, _), m0, r in zip(self.todo, self.baselines, runs[i * n:(i + 1) * n]):
-                rows.append(_case_row(v, s, None, None, _error_text(r)) if isinstance(r, BaseException) else _case_row(v, s, m0, r))
+                rows.append(_run_row(v, s, m0, r))
             self.cache[tuple(x)] = rows
             F[i], G[i] = robust_objectives(rows, self.statistic)
         if self.journal is not None:
@@ -527,11 +531,7 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
             if isinstance(r, BaseException):
                 raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
-    identity = {"vtb.optimize": {
-        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
-        "baseline": hashlib.sha256(json.dumps(baselines, sort_keys=True).encode()).hexdigest(),
-        "cases": [(v, s) for v, s, _ in todo], "statistic": statistic_name,
-    }}
+    identity = checkpoint_identity(config, baselines, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
     journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
     evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, journal=journal)
     initial = None
@@ -545,8 +545,7 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
         initial = (X0, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)))
     if journal is not None:
         evaluate.load(identity)
-    problem = moga.Problem(lower=[b[0] for b in BOUNDS], upper=[b[1] for b in BOUNDS], n_obj=2, n_constr=len(CONSTRAINTS),
-                           evaluate=evaluate, log_scale=np.array(LOG_SCALE))
+    problem = tid_problem(evaluate)
     res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=(1.0, 1.0),
                         initial=initial, stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)
     X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
