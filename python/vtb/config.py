@@ -143,6 +143,8 @@ class Vehicle(StrictFields):
     x_front: float
     contact_constant: Optional[float] = _default("VehicleConfig", "contact_constant")
     rails: int = _default("VehicleConfig", "rails")
+    contact_patch: bool = _default("VehicleConfig", "contact_patch")
+    rail_crown_radius: float = _default("VehicleConfig", "rail_crown_radius")
 
     @property
     def length(self) -> float:
@@ -184,6 +186,7 @@ class Output(StrictFields):
 
     points: list = _default("OutputConfig", "points")
     window: Optional[list] = _default("OutputConfig", "window")
+    band_limit: Optional[float] = _default("OutputConfig", "band_limit")
 
 
 @documented("TidConfig")

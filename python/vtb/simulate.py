@@ -15,7 +15,7 @@ from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
 #: Units of the metrics by the ending of their names (``{layer}_acc_max`` → m/s²).
-METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("contact_force_max", "N"), ("contact_force_min", "N"), ("contact_loss_events", "–"))
+METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_max_raw", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("contact_force_max", "N"), ("contact_force_min", "N"), ("contact_loss_events", "–"))
 
 
 def metric_unit(name: str) -> str:
@@ -49,7 +49,24 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
         raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")
     cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)))
+    _warn_band_limit(cfg)
     return text, irregularity_profile(cfg)
+
+
+def _warn_band_limit(cfg: Config) -> None:
+    """A band-limited index beyond the band the run resolves for its top layer warns
+    (:class:`vtb.ResolutionWarning`); a configuration the core refuses is left to the run, which
+    names the field."""
+    from .resolution import warn_beyond
+
+    fc = _real(getattr(cfg.output, "band_limit", None))
+    layers = getattr(cfg.structure, "layers", None)
+    if fc is None or not layers:
+        return
+    try:
+        warn_beyond(cfg, layers[0].name, fc, "output.band_limit")
+    except VtbError:
+        pass
 
 
 def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
@@ -102,6 +119,10 @@ class Result:
         ``{layer}_acc_settle`` (s, time after which ``|a|`` stays below 5 % of its peak) for each
         layer; ``car_disp_max`` (m), ``car_acc_max``, ``car_acc_rms`` (m/s²) of the first car
         body; ``contact_force_max``/``_min`` (N) and ``contact_loss_events``.
+
+        With ``output.band_limit`` (Hz) every acceleration index is that of the record low-passed
+        at the band limit (:func:`vtb.low_pass`) and each layer's raw peak is kept as
+        ``{layer}_acc_max_raw`` (m/s²).
         """
         return dict(self._metrics)
 
@@ -164,11 +185,18 @@ class Result:
 
     def third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
         """IEC 61260-1 one-third-octave band levels of :meth:`series`, in dB re 1e−6 m/s²
-        (acceleration) or 1e−9 m (displacement); see :func:`vtb.spectra.third_octave`."""
+        (acceleration) or 1e−9 m (displacement); see :func:`vtb.spectra.third_octave`. Bands
+        beyond the band the run resolves for the layer (:func:`vtb.resolved_band`) warn
+        (:class:`vtb.ResolutionWarning`)."""
         from .spectra import third_octave
 
+        from .resolution import warn_beyond
+
         t, x = self.series(layer, quantity, point, window)
-        return third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
+        bands = third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
+        if len(bands["upper"]):
+            warn_beyond(self.config, layer, float(bands["upper"][-1]), "the band levels", stepped=True)
+        return bands
 
     def comfort(self, car: int = 0, window: Optional[tuple] = None) -> dict:
         """Ride-comfort indices of a car body's vertical acceleration, optionally over an

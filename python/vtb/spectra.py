@@ -4,6 +4,9 @@
   ``nperseg`` samples overlapping by half, each segment's mean removed, density scaling — so
   that the integral of the PSD over frequency is the signal's variance (units: signal² / Hz,
   e.g. (m/s²)²/Hz).
+* :func:`low_pass`: the core's zero-phase low-pass of the band-limited indices
+  (``output.band_limit``): an 8th-order Butterworth run forwards and backwards, gain
+  1/(1 + (f/f_b)¹⁶), −6 dB at the band limit f_b (docs/model.md §8).
 * :func:`third_octave`: IEC 61260-1 base-10 one-third-octave bands. Exact midband frequencies
   f_m = 1000 Hz · 10^(x/10), band edges f_m · 10^(∓1/20); the band power is the PSD integrated
   over the band (trapezoidal rule on the PSD interpolated linearly between bins, edges
@@ -21,11 +24,23 @@ from typing import Optional
 
 import numpy as np
 
+from . import _core
 from .errors import config_error
 
 #: Level references (IEC / ISO conventions for vibration): acceleration 1e−6 m/s²,
 #: velocity 1e−9 m/s, displacement 1e−9 m.
 REFERENCE = {"acc": 1e-6, "vel": 1e-9, "disp": 1e-9}
+def low_pass(x, band_limit: float, dt: float) -> np.ndarray:
+    """``x`` (a 1-D record sampled every ``dt`` s) low-passed at ``band_limit`` Hz with zero
+    phase: the filter every band-limited index of a run is taken after, so a record filtered
+    here gives the run's band-limited peak (same units as ``x``). Raises
+    :class:`vtb.ConfigError` naming ``x``, ``band_limit`` or ``dt``."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 1 or a.size < 2:
+        raise config_error("x", f"shape {a.shape}", "must be a 1-D record of at least 2 samples")
+    return _core.low_pass(np.ascontiguousarray(a), float(band_limit), float(dt))
+
+
 #: A band is reported when it spans at least this many Welch frequency bins.
 MIN_BINS_PER_BAND = 4
 #: IEC 61260-1 nominal midband frequencies of the one-third-octave bands 10 Hz … 8 kHz per

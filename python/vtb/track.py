@@ -69,6 +69,7 @@ import scipy.sparse.linalg as spla
 from . import _core
 from .config import Config, Solver, _to_plain
 from .errors import SolverError, config_error
+from .resolution import warn_beyond
 
 __all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT"]
 
@@ -325,6 +326,7 @@ def receptance(
         xr, scalar = xf, True
     else:
         xr, scalar = _positions(response_x, system.length, "response_x")
+    warn_beyond(config, config.structure.layers[ri].name, float(freqs.max()), "the receptance", stepped=False)
     force = _shape_matrix(system, li, xf)
     resp = _shape_matrix(system, ri, xr)
     out = _harmonic_solve(system, freqs, force, resp)[:, :, 0]
@@ -421,6 +423,7 @@ def decay_rate(
             raise config_error("x0", x0, "must be a single position (m)")
         x0v = float(xa[0])
     freqs = _frequencies(frequencies)
+    warn_beyond(config, config.structure.layers[li].name, float(freqs.max()), "the decay rate", stepped=False)
     if direction is not None and (isinstance(direction, bool) or direction not in (1, -1)):
         raise config_error("direction", direction, "must be +1 (towards x = L) or -1 (towards x = 0)")
     room = {1: L - x0v, -1: x0v}

@@ -627,6 +627,78 @@ impl FemBasis {
         k22 / (k11 * k22 - k12 * k12)
     }
 
+    /// Pieces of the patch [x − a, x + a] cut at the nodes (and at 0 and `length`), each with
+    /// its element, for integrals over a distributed contact.
+    fn patch_pieces(&self, x: f64, a: f64) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        let (lo, hi) = ((x - a).max(0.0), (x + a).min(self.length));
+        let (e0, e1) = (self.element_of(lo), self.element_of(hi));
+        (e0..=e1).filter_map(move |e| {
+            let (p, q) = (lo.max(self.nodes[e]), hi.min(self.nodes[e + 1]));
+            (q > p).then_some((e, p, q))
+        })
+    }
+
+    /// Σ over the patch's Gauss points of w·q(s)·f(e, x + s), normalised by the share of the
+    /// load on the structure: q(s) = 1 − s²/a² is the Hertz line load (the pressure of an
+    /// elliptical contact integrated across the rail head) along the rail.
+    fn patch_average(&self, x: f64, a: f64, mut f: impl FnMut(usize, f64, f64)) {
+        let (nodes, weights) = gauss16();
+        let mut total = 0.0;
+        for (_, p, q) in self.patch_pieces(x, a) {
+            let (m, h) = (0.5 * (p + q), 0.5 * (q - p));
+            for (t, w) in nodes.iter().zip(weights) {
+                let s = (m + h * t - x) / a;
+                total += w * h * (1.0 - s * s);
+            }
+        }
+        for (e, p, q) in self.patch_pieces(x, a) {
+            let (m, h) = (0.5 * (p + q), 0.5 * (q - p));
+            for (t, w) in nodes.iter().zip(weights) {
+                let xs = m + h * t;
+                let s = (xs - x) / a;
+                f(e, xs, w * h * (1.0 - s * s) / total);
+            }
+        }
+    }
+
+    /// Displacement shape vector of a unit load spread over the Hertz patch of half-length `a`
+    /// centred at x: ∫N(x + s)·q(s)ds/∫q(s)ds, exact (16 Gauss points per element piece for a
+    /// quintic integrand). It covers the DOFs of every element the patch touches; `out.values`
+    /// is resized to them (no allocation once it has the capacity).
+    pub fn patch_into(&self, x: f64, a: f64, out: &mut Shape) {
+        let (lo, hi) = ((x - a).max(0.0), (x + a).min(self.length));
+        let (e0, e1) = (self.element_of(lo), self.element_of(hi));
+        out.start = 2 * e0;
+        out.values.clear();
+        out.values.resize(2 * (e1 - e0 + 2), 0.0);
+        let values = &mut out.values;
+        self.patch_average(x, a, |e, xs, w| {
+            let [wf, _] = interdependent(self.nodes[e + 1] - self.nodes[e], self.phi[e]);
+            let xi = xs - self.nodes[e];
+            for (j, c) in wf.iter().enumerate() {
+                values[2 * (e - e0) + j] += w * (c[0] + xi * (c[1] + xi * (c[2] + xi * c[3])));
+            }
+        });
+    }
+
+    /// `local_flexibility` averaged over the Hertz patch with the weight of its line load
+    /// (m/N). An upper bound of the patch's own local flexibility (the double average of the
+    /// clamped element's Green's function), by at most the shear deflection of a patch
+    /// length, about 1 % of the Hertz compliance for a 60 kg rail.
+    pub fn patch_flexibility(&self, ei: f64, x: f64, a: f64) -> f64 {
+        let mut f = 0.0;
+        self.patch_average(x, a, |_, xs, w| f += w * self.local_flexibility(ei, xs));
+        f
+    }
+
+    /// Most shape-vector entries of a patch of half-length `a` anywhere on the mesh.
+    pub fn patch_len(&self, a: f64) -> usize {
+        let shortest = (0..self.n_elements())
+            .map(|e| self.nodes[e + 1] - self.nodes[e])
+            .fold(f64::INFINITY, f64::min);
+        2 * ((2.0 * a / shortest).ceil() as usize + 2)
+    }
+
     pub fn pieces(&self) -> Vec<Piece> {
         (0..self.n_elements())
             .map(|e| Piece {
@@ -938,6 +1010,94 @@ mod tests {
             for i in 0..4 {
                 assert!((got[i] - want[j][i]).abs() < 1e-12, "h{} cond {i}", j + 1);
             }
+        }
+    }
+
+    /// A rail mesh like the converged preset's: Timoshenko elements of 32 mm with a node on
+    /// every fastener, one shorter element to exercise uneven nodes.
+    fn rail_mesh() -> FemBasis {
+        let mut nodes = FemBasis::uniform(1.28, 40).nodes;
+        nodes.insert(21, 0.6545);
+        FemBasis {
+            length: 1.28,
+            phi: vec![0.0; nodes.len() - 1],
+            nodes,
+        }
+        .with_shear(6.625e6, 2.5e8)
+    }
+
+    /// Brute force: the midpoint rule over the patch on 200 000 points of the point shape
+    /// (a second quadrature that never splits at the nodes).
+    fn brute_patch(mesh: &FemBasis, x: f64, a: f64, mut f: impl FnMut(f64, f64)) {
+        let n = 200_000;
+        let h = 2.0 * a / n as f64;
+        let w: Vec<f64> = (0..n)
+            .map(|i| {
+                let s = (-a + (i as f64 + 0.5) * h) / a;
+                let xs = x + s * a;
+                if (0.0..=mesh.length).contains(&xs) { 1.0 - s * s } else { 0.0 }
+            })
+            .collect();
+        let total: f64 = w.iter().sum();
+        for (i, wi) in w.iter().enumerate() {
+            f(x - a + (i as f64 + 0.5) * h, wi / total);
+        }
+    }
+
+    #[test]
+    fn patch_shape_is_the_load_weighted_average_of_the_point_shape() {
+        let mesh = rail_mesh();
+        let basis = LayerBasis::Fem(mesh.clone());
+        let a = 6.4e-3;
+        // Inside one element, across a node, across the uneven node, at the end.
+        for &x in &[0.101, 0.128, 0.6545 + 0.002, 0.64, 1.277] {
+            let mut got = Shape::default();
+            mesh.patch_into(x, a, &mut got);
+            assert!(got.values.len() <= mesh.patch_len(a));
+            let mut want = vec![0.0; mesh.n_dofs()];
+            brute_patch(&mesh, x, a, |xs, w| {
+                let s = basis.shape(xs.min(mesh.length));
+                for (k, v) in s.values.iter().enumerate() {
+                    want[s.start + k] += w * v;
+                }
+            });
+            for (k, w) in want.iter().enumerate() {
+                let g = k
+                    .checked_sub(got.start)
+                    .and_then(|j| got.values.get(j))
+                    .copied()
+                    .unwrap_or(0.0);
+                assert!((g - w).abs() < 1e-6, "x={x} dof {k}: {g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_patch_sees_a_linear_field_at_its_centre() {
+        // Nodal values of w = 2 + 3x (ψ = 3): the interdependent element interpolates it
+        // exactly, and a symmetric load averages it to its value at the centre.
+        let mesh = rail_mesh();
+        let u: Vec<f64> = mesh
+            .nodes
+            .iter()
+            .flat_map(|&x| [2.0 + 3.0 * x, 3.0])
+            .collect();
+        for &x in &[0.3, 0.64, 0.655] {
+            let mut s = Shape::default();
+            mesh.patch_into(x, 6.4e-3, &mut s);
+            let w: f64 = s.values.iter().zip(&u[s.start..]).map(|(a, b)| a * b).sum();
+            assert!((w - (2.0 + 3.0 * x)).abs() < 1e-12, "{w}");
+        }
+    }
+
+    #[test]
+    fn patch_flexibility_is_the_weighted_average_of_the_local_flexibility() {
+        let mesh = rail_mesh();
+        for &x in &[0.101, 0.128, 0.6545 + 0.002] {
+            let got = mesh.patch_flexibility(6.625e6, x, 6.4e-3);
+            let mut want = 0.0;
+            brute_patch(&mesh, x, 6.4e-3, |xs, w| want += w * mesh.local_flexibility(6.625e6, xs));
+            assert!((got - want).abs() < 1e-6 * want, "x={x}: {got} vs {want}");
         }
     }
 }

@@ -253,10 +253,24 @@ pub struct VehicleConfig {
     /// amplitudes imply).
     #[serde(default = "default_rails")]
     pub rails: usize,
+    /// Distributed contact (true/false): each wheel's force is spread along the rail over its
+    /// Hertz contact patch, the parabolic line load of an elliptical contact whose half-length
+    /// (m) follows from Hertz theory for the static wheel load, `wheel_radius` and
+    /// `rail_crown_radius` (steel on steel); the rail displacement the contact sees is the same
+    /// load-weighted average. Needs a finite-element rail. `false`: a point contact.
+    #[serde(default)]
+    pub contact_patch: bool,
+    /// Crown radius of the rail head (m) across the rail, for the contact patch.
+    #[serde(default = "default_rail_crown_radius")]
+    pub rail_crown_radius: f64,
 }
 
 fn default_rails() -> usize {
     2
+}
+
+pub(crate) fn default_rail_crown_radius() -> f64 {
+    0.3
 }
 
 impl VehicleConfig {
@@ -392,6 +406,13 @@ pub struct OutputConfig {
     /// Empty (the default): the whole run.
     #[serde(default)]
     pub window: Option<[f64; 2]>,
+    /// Band limit (Hz) of the acceleration indices: every layer's and the car's acceleration
+    /// record is low-passed at this frequency (8th-order Butterworth run forwards and
+    /// backwards: zero phase, gain 1/(1 + (f/f_b)¹⁶) at the limit f_b, −6 dB there) before its peak, r.m.s.
+    /// and settle time are taken; the raw peak stays as `{layer}_acc_max_raw`. Must lie below
+    /// the Nyquist frequency 1/(2·solver.dt). Empty (the default): raw indices.
+    #[serde(default)]
+    pub band_limit: Option<f64>,
 }
 
 /// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
@@ -867,6 +888,18 @@ impl Config {
             if let Some(g) = v.contact_constant {
                 positive(&format!("{p}.contact_constant"), g)?;
             }
+            positive(&format!("{p}.rail_crown_radius"), v.rail_crown_radius)?;
+            if v.contact_patch && self.discretisation.method != Method::Fem {
+                return Err(VtbError::config(
+                    format!("{p}.contact_patch"),
+                    true,
+                    format!(
+                        "a distributed contact needs a finite-element rail (discretisation.method \
+                         = \"fem\"), not {:?}",
+                        self.discretisation.method
+                    ),
+                ));
+            }
             finite(&format!("{p}.x_front"), v.x_front)?;
             let offs = v.wheel_offsets();
             let (rear, front) = (offs[3], offs[0] + travel);
@@ -953,6 +986,9 @@ impl Config {
                     ),
                 ));
             }
+        }
+        if let Some(fc) = self.output.band_limit {
+            crate::filter::check("output.band_limit", fc, dt)?;
         }
         if !profile.values.is_empty() {
             positive("irregularity.dx", profile.dx)?;

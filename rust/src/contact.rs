@@ -34,6 +34,77 @@ pub fn compression(g: f64, p: f64) -> f64 {
     g * p.max(0.0).powf(2.0 / 3.0)
 }
 
+/// Young's modulus (Pa) and Poisson's ratio of wheel and rail steel.
+pub const STEEL_YOUNG: f64 = 2.1e11;
+pub const STEEL_POISSON: f64 = 0.3;
+
+/// The complete elliptic integral K(m) of parameter m = e² ∈ [0, 1) and σ(m) = 1 − E(m)/K(m),
+/// by the arithmetic–geometric mean (σ = Σ 2^{n−1}·c_n², without the cancellation of K − E).
+fn elliptic_k_sigma(m: f64) -> (f64, f64) {
+    let (mut a, mut b) = (1.0f64, (1.0 - m).sqrt());
+    let mut c2 = m;
+    let mut sigma = 0.5 * m;
+    let mut pow = 0.5;
+    for _ in 0..64 {
+        let a1 = 0.5 * (a + b);
+        // c_{n+1} = (a_n − b_n)/2 = c_n²/(4·a_{n+1}).
+        let c = c2 / (4.0 * a1);
+        (a, b) = (a1, (a * b).sqrt());
+        c2 = c * c;
+        pow *= 2.0;
+        sigma += pow * c2;
+        if c2 < 1e-34 {
+            break;
+        }
+    }
+    (std::f64::consts::PI / (2.0 * a), sigma)
+}
+
+/// Half-length (m) along the rail of the Hertz contact ellipse of a wheel of rolling radius
+/// `wheel_radius` on a rail head of crown radius `rail_radius` (m) under a load `p` (N), both
+/// of steel (`STEEL_YOUNG`, `STEEL_POISSON`): the wheel's curvature acts along the rail, the
+/// crown's across it (Johnson, *Contact Mechanics*, 1985, §4.2). With e² = 1 − b²/a² of the
+/// semi-axes a ≥ b, B/A = (E(e)/(1 − e²) − K(e))/(K(e) − E(e)) fixes e and
+/// a³ = 3P·(K − E)/(2π·A·E*·e²), A ≤ B the half curvature sums, E* = E/(2(1 − ν²)).
+pub fn patch_half_length(p: f64, wheel_radius: f64, rail_radius: f64) -> f64 {
+    let e_star = STEEL_YOUNG / (2.0 * (1.0 - STEEL_POISSON * STEEL_POISSON));
+    let (along, across) = (0.5 / wheel_radius, 0.5 / rail_radius);
+    let (a_c, b_c) = (along.min(across), along.max(across));
+    // (E/(1 − m) − K)/(K − E) with E = K·(1 − σ).
+    let ratio = |m: f64| {
+        let (_, sigma) = elliptic_k_sigma(m);
+        (m - sigma) / ((1.0 - m) * sigma)
+    };
+    // B/A grows from 1 at m = 0 without bound as m → 1: bisection on m.
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    let target = b_c / a_c;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid == lo || mid == hi {
+            break;
+        }
+        if ratio(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let m = 0.5 * (lo + hi);
+    let major = if m == 0.0 {
+        // Circular contact: a³ = 3P/(8·A·E*), the limit of the expression below.
+        (3.0 * p / (8.0 * a_c * e_star)).cbrt()
+    } else {
+        let (k, sigma) = elliptic_k_sigma(m);
+        (3.0 * p * k * sigma / (2.0 * std::f64::consts::PI * a_c * e_star * m)).cbrt()
+    };
+    // The major axis lies along the smaller curvature sum.
+    if along <= across {
+        major
+    } else {
+        major * (1.0 - m).sqrt()
+    }
+}
+
 /// Newton solver for P = h(δ_free − A·P) with preallocated work space.
 ///
 /// Converged when every wheel satisfies |P_i − h(δ_i)| ≤ `tol`·P_ref,i, P_ref being the static
@@ -245,5 +316,38 @@ mod tests {
         let d0 = dfree[0] - a[0] * p[0];
         assert!((p[0] - force(g[0], d0)).abs() < 1e-6);
         assert!(p[0] > 0.0);
+    }
+
+    #[test]
+    fn elliptic_integrals_against_tabulated_values() {
+        // Abramowitz & Stegun Table 17.1: K(½) = 1.854074677301372, E(½) = 1.350643881047675.
+        let (k, sigma) = elliptic_k_sigma(0.5);
+        let e = k * (1.0 - sigma);
+        assert!((k - 1.854074677301372).abs() < 1e-14, "{k}");
+        assert!((e - 1.350643881047675).abs() < 1e-14, "{e}");
+        let (k0, s0) = elliptic_k_sigma(0.0);
+        assert!((k0 - std::f64::consts::FRAC_PI_2).abs() < 1e-15 && s0 == 0.0);
+    }
+
+    #[test]
+    fn hertz_patch_against_the_circular_closed_form_and_the_wheel_rail_case() {
+        // Equal radii: a circle, a³ = 3P·R_e/(4E*), R_e = 1/(A + B) = R for crossed cylinders.
+        let e_star = STEEL_YOUNG / (2.0 * (1.0 - STEEL_POISSON * STEEL_POISSON));
+        let circle = (3.0 * 70e3 * 0.5 / (4.0 * e_star)).cbrt();
+        assert!((patch_half_length(70e3, 0.5, 0.5) - circle).abs() < 1e-12 * circle);
+        // Nearly equal radii leave the closed form continuously (ellipse branch).
+        let near = patch_half_length(70e3, 0.5, 0.4999);
+        assert!((near - circle).abs() < 1e-3 * circle, "{near} vs {circle}");
+        // Wheel 0.46 m on a 0.3 m crown at 72 kN: a 12.84 mm long patch (SciPy's ellipk/ellipe
+        // with brentq on the same equations give a = 6.41887 mm; about 13 mm is the usual
+        // figure for such a contact).
+        let a = patch_half_length(72e3, 0.46, 0.3);
+        assert!((a - 6.41887e-3).abs() < 1e-8, "{a}");
+        // a ∝ P^{1/3}.
+        let a2 = patch_half_length(8.0 * 72e3, 0.46, 0.3);
+        assert!((a2 / a - 2.0).abs() < 1e-12);
+        // Swapped radii: the patch along the rail is the minor axis b = a·√(1 − e²).
+        let b = patch_half_length(72e3, 0.3, 0.46);
+        assert!((b - 4.82842e-3).abs() < 1e-8, "{b}");
     }
 }

@@ -27,6 +27,8 @@ pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
         contact_constant: None,
         x_front,
         rails: 2,
+        contact_patch: false,
+        rail_crown_radius: crate::config::default_rail_crown_radius(),
     }
 }
 
@@ -152,7 +154,7 @@ pub fn paper() -> Config {
         solver: SolverConfig::default(),
         output: OutputConfig {
             points: vec![80.0],
-            window: None,
+            ..OutputConfig::default()
         },
         tids: None,
     }

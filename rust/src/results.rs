@@ -1,6 +1,7 @@
 //! The histories of one run and the metrics derived from them.
 
 use crate::config::Config;
+use crate::filter::low_pass;
 use crate::indices::{amplitude, rms, settle_time};
 use crate::structure::Structure;
 use crate::vehicle::N_DOF;
@@ -51,6 +52,8 @@ pub struct RunResult {
     pub contact_loss: Vec<ContactLoss>,
     /// The metrics' analysis window (s), `output.window`.
     pub window: Option<[f64; 2]>,
+    /// Low-pass frequency (Hz) of the acceleration indices, `output.band_limit`.
+    pub band_limit: Option<f64>,
 }
 
 impl RunResult {
@@ -84,6 +87,7 @@ impl RunResult {
             contact_force: vec![0.0; len * n_wheels],
             contact_loss: Vec::new(),
             window: cfg.output.window,
+            band_limit: cfg.output.band_limit,
         }
     }
 
@@ -123,13 +127,25 @@ impl RunResult {
     ///
     /// With an analysis window ([`RunResult::window`]) every metric is taken over the steps
     /// inside it; settle times are still counted from t = 0.
+    ///
+    /// With a band limit ([`RunResult::band_limit`]) every acceleration index is taken of the
+    /// whole record low-passed at that frequency (zero phase, [`crate::filter`]) before the
+    /// window is applied, and each layer's raw peak is kept as `{name}_acc_max_raw`.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
         let steps = self.window_steps();
         let t0 = *steps.start() as f64 * self.dt;
         let mut m = BTreeMap::new();
+        let limited = |a: Vec<f64>| match self.band_limit {
+            Some(fc) => low_pass(&a, fc, self.dt),
+            None => a,
+        };
         for (li, name) in self.layer_names.iter().enumerate() {
             let d = &self.layer_disp(li, 0)[steps.clone()];
-            let a = &self.layer_acc(li, 0)[steps.clone()];
+            let raw = self.layer_acc(li, 0);
+            if self.band_limit.is_some() {
+                m.insert(format!("{name}_acc_max_raw"), amplitude(&raw[steps.clone()]));
+            }
+            let a = &limited(raw)[steps.clone()];
             m.insert(format!("{name}_disp_max"), amplitude(d));
             m.insert(format!("{name}_acc_max"), amplitude(a));
             m.insert(format!("{name}_acc_rms"), rms(a));
@@ -140,7 +156,7 @@ impl RunResult {
         }
         if self.n_cars > 0 {
             let d = &self.vehicle_dof_disp(0, 0)[steps.clone()];
-            let a = &self.vehicle_dof_acc(0, 0)[steps.clone()];
+            let a = &limited(self.vehicle_dof_acc(0, 0))[steps.clone()];
             m.insert("car_disp_max".into(), amplitude(d));
             m.insert("car_acc_max".into(), amplitude(a));
             m.insert("car_acc_rms".into(), rms(a));

@@ -3,7 +3,7 @@
 
 use crate::basis::Shape;
 use crate::config::{Config, InitialState, Profile};
-use crate::contact::{ContactSolver, compression};
+use crate::contact::{ContactSolver, compression, patch_half_length};
 use crate::error::{Result, VtbError};
 use crate::fesea::FeSea;
 use crate::integrator::{DamperParams, GW, Newmark, PortBlock};
@@ -356,6 +356,17 @@ impl RailCorrection<'_> {
     }
 }
 
+/// Static wheel loads on the modelled rail (N) of every car's wheelsets, from the statics of
+/// each (statically determinate) car.
+fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
+    cars.iter()
+        .flat_map(|c| {
+            let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
+            r.map(|ri| ri / c.car.rails)
+        })
+        .collect()
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -386,6 +397,10 @@ pub struct Simulation<'m, const W: usize = 1> {
     track_ports: Vec<PortBlock<W>>,
     /// Add the rail elements' local flexibility under the wheels (finite-element rails).
     element_flexibility: bool,
+    /// Half-length (m) of each wheel's contact patch, 0 for a point contact.
+    patch: Vec<f64>,
+    /// A wheel's rail shape vector (point or patch).
+    wheel_shape: Shape,
     /// Contact force of each wheel on the modelled rail (N), `[lane·n_wheels + wheel]`.
     p: Vec<f64>,
     shape: Shape,
@@ -484,6 +499,23 @@ impl<'m, const W: usize> Simulation<'m, W> {
             .map(|c| CarRun::new(c, dt, cfg.solver.gravity))
             .collect::<Result<Vec<_>>>()?;
         let nw = cars.len() * N_WHEELS;
+        let patch: Vec<f64> = static_wheel_loads(&cars, cfg.solver.gravity)
+            .iter()
+            .enumerate()
+            .map(|(wi, &load)| {
+                let v = &cfg.vehicles[wi / N_WHEELS];
+                if v.contact_patch && load > 0.0 {
+                    patch_half_length(load, v.wheel_radius, v.rail_crown_radius)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let wheel_shape_len = patch
+            .iter()
+            .map(|&a| st.wheel_shape_len(a))
+            .max()
+            .unwrap_or(0);
         let g: Vec<f64> = cars
             .iter()
             .flat_map(|c| [c.car.hertz_g; N_WHEELS])
@@ -567,6 +599,11 @@ impl<'m, const W: usize> Simulation<'m, W> {
             movers,
             track_ports,
             element_flexibility: cfg.discretisation.element_flexibility,
+            patch,
+            wheel_shape: Shape {
+                start: 0,
+                values: Vec::with_capacity(wheel_shape_len),
+            },
             cars,
             p: vec![0.0; nw * W],
             shape: Shape {
@@ -604,12 +641,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let cfg = &model.cfg;
         let st = &model.structure;
         let g = cfg.solver.gravity;
-        // Wheel loads from the statics of each (statically determinate) car, per modelled rail.
-        let mut loads = Vec::with_capacity(self.p.len() / W);
-        for c in &self.cars {
-            let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
-            loads.extend(r.iter().map(|ri| ri / c.car.rails));
-        }
+        let loads = static_wheel_loads(&self.cars, g);
         if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
             return Err(VtbError::config(
                 format!("vehicles[{}]", i / N_WHEELS),
@@ -629,8 +661,14 @@ impl<'m, const W: usize> Simulation<'m, W> {
         // model under the corrected loads; H_{−1} = H_0 (no derivative term at the start).
         let mut g0 = [0.0; 4];
         let correction = self.correction.as_ref();
-        let mut add = |layer: usize, x: f64, w: f64| {
-            let s = st.shape(layer, x);
+        let wheel_shape = &mut self.wheel_shape;
+        let mut add = |layer: usize, x: f64, w: f64, patch: f64| {
+            let s = if layer == 0 {
+                st.wheel_shape_into(x, patch, wheel_shape);
+                &*wheel_shape
+            } else {
+                &st.shape(layer, x)
+            };
             for (k, v) in s.values.iter().enumerate() {
                 f0[s.start + k] += w * v;
             }
@@ -643,11 +681,12 @@ impl<'m, const W: usize> Simulation<'m, W> {
             }
         };
         for m in &self.movers {
-            add(m.layer, m.x0, m.magnitude);
+            add(m.layer, m.x0, m.magnitude, 0.0);
         }
         for (ci, c) in self.cars.iter().enumerate() {
             for w in 0..N_WHEELS {
-                add(0, c.car.wheel_x0[w], loads[ci * N_WHEELS + w]);
+                let wi = ci * N_WHEELS + w;
+                add(0, c.car.wheel_x0[w], loads[wi], self.patch[wi]);
             }
         }
         if let Some(rc) = self.correction.as_mut() {
@@ -726,7 +765,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
             for w in 0..N_WHEELS {
                 let x = c.car.wheel_x0[w];
                 let p0 = loads[ci * N_WHEELS + w];
-                zw[w] = st.displacement(0, x, &u0)
+                st.wheel_shape_into(x, self.patch[ci * N_WHEELS + w], &mut self.wheel_shape);
+                zw[w] = dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
                     + cfg.irregularity_share(0.0) * profile.at(x)
                     + compression(c.car.hertz_g, p0);
             }
@@ -828,8 +868,9 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 let xs: [f64; N_WHEELS] = std::array::from_fn(|w| c.car.wheel_x0[w] + v * t1);
                 let terms = self.correction.as_ref().map(|rc| rc.fs.load_terms_at(xs));
                 for w in 0..N_WHEELS {
-                    st.shape_into(0, xs[w], &mut self.shape);
-                    self.track.vector_into(&self.shape, &mut ports.vecs[w]);
+                    let a = self.patch[ci * N_WHEELS + w];
+                    st.wheel_shape_into(xs[w], a, &mut self.wheel_shape);
+                    self.track.vector_into(&self.wheel_shape, &mut ports.vecs[w]);
                     if let (Some(rc), Some(force), Some(t)) =
                         (self.correction.as_mut(), ports.force.as_mut(), terms)
                     {
@@ -838,7 +879,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                         fv.copy_from(&ports.vecs[w]);
                         // A modal rail's shape vector covers all its DOFs, g1..g4 first.
                         for g in 0..4 {
-                            fv.val[rc.fs.dofs[g] - self.shape.start] += f[g];
+                            fv.val[rc.fs.dofs[g] - self.wheel_shape.start] += f[g];
                         }
                         rc.wheel_r[ci * N_WHEELS + w] = r;
                     }
@@ -883,7 +924,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     // excitation from it). Wheels are more than an element apart.
                     for w in 0..N_WHEELS {
                         let wi = ci * N_WHEELS + w;
-                        let f = st.local_flexibility(0, c.car.wheel_x0[w] + v * t1);
+                        let f = st.wheel_flexibility(c.car.wheel_x0[w] + v * t1, self.patch[wi]);
                         for lane in 0..W {
                             amat[lane * nw * nw + wi * nw + wi] += f;
                         }

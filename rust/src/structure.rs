@@ -222,6 +222,36 @@ impl Structure {
         }
     }
 
+    /// Shape vector of a wheel's contact on the rail (layer 0) at x: the point shape for a
+    /// point contact (`patch` = 0), else the load-weighted average over its Hertz patch of
+    /// half-length `patch` (m; finite-element rails, which the configuration ensures).
+    pub fn wheel_shape_into(&self, x: f64, patch: f64, out: &mut Shape) {
+        match &self.layers[0].basis {
+            LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_into(x, patch, out),
+            _ => {
+                out.values.resize(self.layers[0].basis.shape_len(), 0.0);
+                self.shape_into(0, x, out);
+            }
+        }
+    }
+
+    /// `local_flexibility` of the rail under a wheel, averaged over its patch (m/N).
+    pub fn wheel_flexibility(&self, x: f64, patch: f64) -> f64 {
+        let l = &self.layers[0];
+        match &l.basis {
+            LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
+            _ => self.local_flexibility(0, x),
+        }
+    }
+
+    /// Entries a wheel's shape vector may need (`wheel_shape_into`).
+    pub fn wheel_shape_len(&self, patch: f64) -> usize {
+        match &self.layers[0].basis {
+            LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_len(patch),
+            b => b.shape_len(),
+        }
+    }
+
     /// Displacement u_layer(x) for a DOF vector.
     pub fn displacement(&self, layer: usize, x: f64, q: &[f64]) -> f64 {
         dot(&self.shape(layer, x), q)

@@ -184,6 +184,8 @@ mod tests {
             contact_constant: None,
             x_front: 30.0,
             rails: 2,
+            contact_patch: false,
+            rail_crown_radius: crate::config::default_rail_crown_radius(),
         }
     }
 

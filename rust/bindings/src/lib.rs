@@ -450,6 +450,51 @@ fn schema() -> String {
     Config::schema()
 }
 
+/// `x` (sampled every `dt` s) low-passed at `band_limit` Hz by the core's zero-phase filter,
+/// the one every band-limited index uses.
+#[pyfunction]
+fn low_pass<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'_, f64>,
+    band_limit: f64,
+    dt: f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(to_py_err(
+            py,
+            VtbError::config("dt", format!("{dt:?}"), "must be a finite number > 0"),
+        ));
+    }
+    vtb::filter::check("band_limit", band_limit, dt).map_err(|e| to_py_err(py, e))?;
+    let x = x.as_slice()?;
+    if let Some(v) = x.iter().find(|v| !v.is_finite()) {
+        return Err(to_py_err(
+            py,
+            VtbError::config("x", format!("{v:?}"), "every sample must be finite"),
+        ));
+    }
+    Ok(PyArray1::from_vec(py, vtb::filter::low_pass(x, band_limit, dt)))
+}
+
+/// The band each layer of a configuration resolves (`vtb::resolution`): a list of dicts
+/// (layer, f_max, basis_f_max, time_f_max in Hz; shortest_wavelength in m), top layer first.
+#[pyfunction]
+fn resolved_bands<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyList>> {
+    let cfg = parse_config(py, config_json)?;
+    cfg.validate(&Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let out = PyList::empty(py);
+    for b in vtb::resolution::resolved_bands(&cfg) {
+        let d = PyDict::new(py);
+        d.set_item("layer", b.layer)?;
+        d.set_item("f_max", b.f_max)?;
+        d.set_item("basis_f_max", b.basis_f_max)?;
+        d.set_item("time_f_max", b.time_f_max)?;
+        d.set_item("shortest_wavelength", b.shortest_wavelength)?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
@@ -461,6 +506,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
     m.add_function(wrap_pyfunction!(check_schema, m)?)?;
+    m.add_function(wrap_pyfunction!(low_pass, m)?)?;
+    m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())

@@ -1,0 +1,204 @@
+//! The frequency band each discretisation resolves (docs/resolution.md).
+//!
+//! A layer's response is resolved up to the lower of two limits, each the frequency at which
+//! that part of the discretisation is [`TOLERANCE`] (1 %) off the continuous beam:
+//! - **basis**: the free bending wave (Euler–Bernoulli, or Timoshenko's lower branch with
+//!   rotary inertia) of the shortest wavelength the layer's basis holds to 1 %: the shortest sine
+//!   of a modal basis (λ = 2L/N; a modal or hybrid basis holds nothing shorter), or for finite
+//!   elements the wave whose Bloch (periodic-mesh) frequency on an element of the longest length
+//!   the mesh allows is 1 % off;
+//! - **time step**: Newmark's average-acceleration rule shifts a frequency f to
+//!   2·atan(πfΔt)/(πfΔt)·f, 1 % low at 2πfΔt = 0.3496.
+//!
+//! Supports raise a layer's frequencies at a given wavelength, so the free beam's frequency is
+//! the conservative end. These bounds are computed from the configuration alone (the mesh's
+//! longest element is at most `element_length`, or L / `fem_elements`).
+
+use crate::config::{Config, LayerConfig, Method};
+use crate::layers::Layer;
+use std::f64::consts::PI;
+
+/// Relative frequency error that bounds a resolved band.
+pub const TOLERANCE: f64 = 0.01;
+
+/// The band one layer resolves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerBand {
+    pub layer: String,
+    /// Upper end of the resolved band (Hz): the lower of the two limits.
+    pub f_max: f64,
+    /// Limit of the spatial basis (Hz) and the shortest bending wavelength it holds (m).
+    pub basis_f_max: f64,
+    pub shortest_wavelength: f64,
+    /// Limit of the time step (Hz).
+    pub time_f_max: f64,
+}
+
+/// ω² (rad²/s²) of the free continuous beam's bending wave of wavenumber k (rad/m): the lower
+/// root of (κGA·k² − ρAω²)(EI·k² + κGA − ρIω²) = (κGA·k)² for a Timoshenko layer.
+fn continuous_omega2(layer: &Layer, k: f64) -> f64 {
+    let (ra, ei, k2) = (layer.rho_a, layer.ei, k * k);
+    match layer.shear {
+        None => ei * k2 * k2 / ra,
+        Some(s) => {
+            // ρA·ρI·ω⁴ − (ρA(EIk² + κGA) + ρI·κGA·k²)·ω² + EI·κGA·k⁴ = 0.
+            let a = ra * s.rho_i;
+            let b = ra * (ei * k2 + s.kga) + s.rho_i * s.kga * k2;
+            let c = ei * s.kga * k2 * k2;
+            // Lower root without cancellation: 2c/(b + √(b² − 4ac)).
+            2.0 * c / (b + (b * b - 4.0 * a * c).max(0.0).sqrt())
+        }
+    }
+}
+
+/// Lowest ω² of the periodic (Bloch) problem of one element with phase θ = k·h between its
+/// nodes: det(K(θ) − λM(θ)) = 0 with K(θ) = Tᴴ·K_e·T, T = [I; e^{iθ}I].
+fn bloch_omega2(m: &[f64; 16], k: &[f64; 16], theta: f64) -> f64 {
+    let (c, s) = (theta.cos(), theta.sin());
+    // 2 × 2 Hermitian reduction: A11 + A22 + e^{iθ}A12 + e^{−iθ}A12ᵀ (blocks of the 4 × 4).
+    let reduce = |a: &[f64; 16]| {
+        let at = |i: usize, j: usize| a[4 * i + j];
+        let diag = |p: usize| at(p, p) + at(p + 2, p + 2) + 2.0 * c * at(p, p + 2);
+        // Off-diagonal (row w, column ψ): a01 + a23 + e^{iθ}·a03 + e^{−iθ}·a21.
+        let re = at(0, 1) + at(2, 3) + c * (at(0, 3) + at(2, 1));
+        let im = s * (at(0, 3) - at(2, 1));
+        (diag(0), diag(1), re, im)
+    };
+    let (k11, k22, kr, ki) = reduce(k);
+    let (m11, m22, mr, mi) = reduce(m);
+    let qa = m11 * m22 - (mr * mr + mi * mi);
+    let qb = -(k11 * m22 + k22 * m11 - 2.0 * (kr * mr + ki * mi));
+    let qc = k11 * k22 - (kr * kr + ki * ki);
+    let disc = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+    // Lower root, written without cancellation.
+    2.0 * qc / (-qb + disc)
+}
+
+/// Newmark's 1 % frequency limit 2πfΔt = x with 1 − 2·atan(x/2)/x = TOLERANCE (bisection).
+fn newmark_limit(dt: f64) -> f64 {
+    let err = |x: f64| 1.0 - 2.0 * (0.5 * x).atan() / x;
+    let (mut lo, mut hi) = (1e-6, 3.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if err(mid) < TOLERANCE {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi) / (2.0 * PI * dt)
+}
+
+/// Largest wavenumber (rad/m) that a finite-element layer with elements of length `h` holds to
+/// TOLERANCE: the first k·h at which the Bloch frequency leaves the continuous one, scanned to
+/// the Brillouin zone's edge θ = π.
+fn fem_wavenumber_limit(cfg: &LayerConfig, h: f64) -> f64 {
+    let layer = element_layer(cfg, h);
+    let (_, m, k) = &layer.element_matrices()[0];
+    let ok = |theta: f64| {
+        let fe = bloch_omega2(m, k, theta).sqrt();
+        let exact = continuous_omega2(&layer, theta / h).sqrt();
+        (fe / exact - 1.0).abs() <= TOLERANCE
+    };
+    let n = 2000;
+    let first_bad = (1..=n).map(|i| PI * i as f64 / n as f64).find(|&t| !ok(t));
+    let Some(bad) = first_bad else {
+        return PI / h;
+    };
+    let (mut lo, mut hi) = (bad - PI / n as f64, bad);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) { lo = mid } else { hi = mid }
+    }
+    lo / h
+}
+
+/// The layer of `cfg` as one finite element of length `h`: its section properties and the
+/// matrices of an element of that length.
+fn element_layer(cfg: &LayerConfig, h: f64) -> Layer {
+    let mut one = cfg.clone();
+    one.element_length = None;
+    Layer::new(&one, h, Method::Fem, 1, &[], 0)
+}
+
+/// The resolved band of every layer of a (validated) configuration, top layer first.
+pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
+    let length = cfg.structure.length;
+    let method = cfg.discretisation.method;
+    let time_f_max = newmark_limit(cfg.solver.dt);
+    cfg.structure
+        .layers
+        .iter()
+        .map(|lc| {
+            let layer = element_layer(lc, length);
+            let k_max = match method {
+                Method::Fem => {
+                    let h = lc
+                        .element_length
+                        .unwrap_or(length / cfg.discretisation.fem_elements as f64)
+                        .min(length);
+                    fem_wavenumber_limit(lc, h)
+                }
+                Method::Modal | Method::Hybrid => PI * lc.modes.max(1) as f64 / length,
+            };
+            let basis_f_max = continuous_omega2(&layer, k_max).sqrt() / (2.0 * PI);
+            LayerBand {
+                layer: lc.name.clone(),
+                f_max: basis_f_max.min(time_f_max),
+                basis_f_max,
+                shortest_wavelength: 2.0 * PI / k_max,
+                time_f_max,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets::{paper, paper_converged};
+
+    #[test]
+    fn newmark_limit_is_where_the_period_error_is_one_percent() {
+        // x = 0.34956: 2·atan(0.17478)/0.34956 = 0.99000 (to 5 digits).
+        let f = newmark_limit(2.5e-5);
+        let x = 2.0 * PI * f * 2.5e-5;
+        assert!((x - 0.34956).abs() < 1e-4, "{x}");
+        assert!((1.0 - 2.0 * (0.5 * x).atan() / x - 0.01).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bloch_frequencies_of_cubic_elements_converge_to_the_beam() {
+        // Long waves on short elements: the Bloch frequency tends to the continuous beam's,
+        // Euler–Bernoulli (the article's rail; errors fall 16-fold per halving, (kh)⁴) and
+        // Timoshenko with rotary inertia (the converged preset's; 5- to 10-fold before the
+        // asymptotic rate: shear governs the short waves).
+        for cfg in [paper(), paper_converged()] {
+            let h = 0.032;
+            let layer = element_layer(&cfg.structure.layers[0], h);
+            let (_, m, k) = &layer.element_matrices()[0];
+            let mut last = f64::INFINITY;
+            for theta in [0.8, 0.4, 0.2, 0.1, 0.05] {
+                let w2 = continuous_omega2(&layer, theta / h);
+                let e = (bloch_omega2(m, k, theta) / w2 - 1.0).abs();
+                assert!(e < last / 4.5 || e < 1e-9, "θ={theta}: {e} after {last}");
+                last = e;
+            }
+        }
+    }
+
+    #[test]
+    fn the_article_hybrid_rail_holds_no_pinned_pinned_wave_and_the_converged_one_does() {
+        let bay = 0.64;
+        let hybrid = &resolved_bands(&paper())[0];
+        // 120 sines on 160 m: nothing shorter than 2.67 m, twice the pinned–pinned wavelength.
+        assert!((hybrid.shortest_wavelength - 2.0 * 160.0 / 120.0).abs() < 1e-9);
+        assert!(hybrid.shortest_wavelength > 2.0 * bay);
+        // The converged rail (Timoshenko, 32 mm elements) holds the pinned–pinned wave with
+        // room to spare, and is limited by its time step (Δt = 2.5e-5 s: 2.23 kHz).
+        let conv = &resolved_bands(&paper_converged())[0];
+        assert!(conv.shortest_wavelength < 2.0 * bay / 3.0, "{conv:?}");
+        assert!((conv.time_f_max - 2225.4).abs() < 0.5, "{conv:?}");
+        assert_eq!(conv.f_max, conv.time_f_max);
+    }
+}
