@@ -60,6 +60,9 @@ def test_converged_example_is_the_converged_preset():
     assert conv.discretisation.method == "fem" and rail.shear_modulus > 0 and rail.shear_coefficient > 0
     # Same structure, car, speed and excitation as the article's preset; only the model differs.
     art = vtb.paper_config(calibrated=True)
+    assert [v.contact_patch for v in conv.vehicles] == [True] and conv.output.band_limit == 2000.0
+    for v in conv.vehicles:
+        v.contact_patch = False
     assert conv.vehicles == art.vehicles and conv.speed == art.speed and conv.irregularity == art.irregularity
     assert [c.positions for c in conv.structure.couplings] == [c.positions for c in art.structure.couplings]
 

@@ -11,6 +11,8 @@ the functions that answer at given frequencies (:func:`vtb.receptance`, :func:`v
 
 from __future__ import annotations
 
+import json
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Optional
@@ -76,8 +78,15 @@ def resolved_band(config: Config) -> ResolvedBand:
     """The band each layer of ``config`` resolves (module docstring). Raises
     :class:`vtb.ConfigError` for an invalid configuration."""
     from .tid_sweep import pinned_pinned_frequency
+    from .track import _structure_json
 
-    bands = {d["layer"]: LayerBand(**d) for d in _core.resolved_bands(config.to_core_json())}
+    # The structure and the time step are all the bands depend on: a structure-only
+    # configuration (as the frequency-domain tools assemble) with the run's Δt.
+    plain = json.loads(_structure_json(config))
+    dt = getattr(config.solver, "dt", None)
+    if isinstance(dt, (int, float)) and not isinstance(dt, bool) and math.isfinite(dt) and dt > 0:
+        plain["solver"]["dt"] = plain["solver"]["t_end"] = float(dt)
+    bands = {d["layer"]: LayerBand(**d) for d in _core.resolved_bands(json.dumps(plain))}
     try:
         f_pp = pinned_pinned_frequency(config)
     except (StopIteration, IndexError):

@@ -85,6 +85,9 @@ def _converged(flexibility: bool = True, dt: Optional[float] = None):
         conv = paper_config(model="converged")
         conv.irregularity = cfg.irregularity
         conv.tids = cfg.tids
+        # One contact model and one index definition for every case of the study: the base's.
+        conv.vehicles = cfg.vehicles
+        conv.output.band_limit = cfg.output.band_limit
         conv.discretisation.element_flexibility = flexibility
         if dt is not None:
             conv.solver.dt = dt
