@@ -19,6 +19,7 @@ from typing import Optional
 
 from . import _core
 from .config import Config
+from .errors import config_error
 
 
 class ResolutionWarning(UserWarning):
@@ -74,24 +75,37 @@ class ResolvedBand:
         return "\n".join(rows)
 
 
-def resolved_band(config: Config) -> ResolvedBand:
-    """The band each layer of ``config`` resolves (module docstring). Raises
-    :class:`vtb.ConfigError` for an invalid configuration."""
-    from .tid_sweep import pinned_pinned_frequency
+def _core_bands(config: Config) -> tuple[list, Optional[float]]:
+    """The core's bands and pinned–pinned frequency of ``config``: its structure and time step,
+    as a structure-only configuration (what the frequency-domain tools assemble) with the
+    run's Δt."""
     from .track import _structure_json
 
-    # The structure and the time step are all the bands depend on: a structure-only
-    # configuration (as the frequency-domain tools assemble) with the run's Δt.
     plain = json.loads(_structure_json(config))
     dt = getattr(config.solver, "dt", None)
     if isinstance(dt, (int, float)) and not isinstance(dt, bool) and math.isfinite(dt) and dt > 0:
         plain["solver"]["dt"] = plain["solver"]["t_end"] = float(dt)
-    bands = {d["layer"]: LayerBand(**d) for d in _core.resolved_bands(json.dumps(plain))}
-    try:
-        f_pp = pinned_pinned_frequency(config)
-    except (StopIteration, IndexError):
-        f_pp = None
-    return ResolvedBand(bands, f_pp)
+    return _core.resolved_bands(json.dumps(plain))
+
+
+def resolved_band(config: Config) -> ResolvedBand:
+    """The band each layer of ``config`` resolves (module docstring). Raises
+    :class:`vtb.ConfigError` for an invalid structure."""
+    bands, f_pp = _core_bands(config)
+    return ResolvedBand({d["layer"]: LayerBand(**d) for d in bands}, f_pp)
+
+
+def pinned_pinned_frequency(config: Config) -> float:
+    """The rail's first pinned–pinned frequency (Hz): the top layer between two of its
+    fasteners (the first discrete coupling under it), a simply supported span d with
+    wavenumber k = π/d. Euler–Bernoulli: ω² = EI·k⁴/ρA; a Timoshenko rail (shear modulus set)
+    gives the lower root of (κGAk² − ρAω²)(EIk² + κGA − ρIω²) = (κGAk)², the beam with shear
+    and rotary inertia. Raises :class:`vtb.ConfigError` naming ``structure.couplings`` when the
+    rail has no discrete supports."""
+    f_pp = _core_bands(config)[1]
+    if f_pp is None:
+        raise config_error("structure.couplings", "[…]", "the top layer has no discrete coupling (fasteners) with two or more points")
+    return f_pp
 
 
 def warn_beyond(config: Config, layer: str, f_top: float, what: str, stepped: bool = True) -> None:

@@ -32,6 +32,7 @@ from .config import Config
 from .errors import ConfigError, VtbError, config_error
 from .moga import write_atomically
 from .presets import tids_around
+from .resolution import pinned_pinned_frequency
 from .simulate import simulate_batch
 
 #: The article's grid: b_t = 1..10 kg; k_t = 1..9 × 10^4..10^8 and 1e9 N/m; c_t = 10..1e4 N·s/m.
@@ -143,25 +144,6 @@ class SweepResult:
         j = int(np.argmax(t["slab_increase"]))
         base = self.baseline["slab_acc_max"]
         return dict(b_t=float(t["b_t"][j]), increase=float(t["slab_increase"][j]), relative=float(t["slab_increase"][j] / base))
-
-
-def pinned_pinned_frequency(config: Config) -> float:
-    """The rail's first pinned–pinned frequency (Hz): the rail between two fasteners, a
-    simply supported span d (the fastener spacing), wavenumber k = π/d. Euler–Bernoulli:
-    ω² = EI k⁴/ρA. A Timoshenko rail (shear modulus set) gives the lower root of
-    ρ²I/κG·ω⁴ − (ρA + ρI k²(1 + E/κG))·ω² + EI k⁴ = 0 (the Timoshenko beam's frequency
-    equation, with rotary inertia and shear); it tends to the Euler–Bernoulli value as κG → ∞ and ρI → 0."""
-    rail = config.structure.layers[0]
-    fast = next(c for c in config.structure.couplings if c.upper == rail.name and c.kind == "discrete")
-    pos = sorted(fast.positions)
-    k = math.pi / (pos[1] - pos[0])
-    E, I, rho, A = rail.youngs_modulus, rail.inertia, rail.density, rail.area
-    if rail.shear_modulus is None:
-        return math.sqrt(E * I * k**4 / (rho * A)) / (2 * math.pi)
-    kg = rail.shear_coefficient * rail.shear_modulus
-    a, b, c = rho * rho * I / kg, rho * A + rho * I * k * k * (1 + E / kg), E * I * k**4
-    w2 = 2 * c / (b + math.sqrt(b * b - 4 * a * c))  # the lower root, without cancellation
-    return math.sqrt(w2) / (2 * math.pi)
 
 
 def grid(b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> list:

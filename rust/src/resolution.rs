@@ -14,7 +14,7 @@
 //! the conservative end. These bounds are computed from the configuration alone (the mesh's
 //! longest element is at most `element_length`, or L / `fem_elements`).
 
-use crate::config::{Config, LayerConfig, Method};
+use crate::config::{Config, CouplingKind, LayerConfig, Method};
 use crate::layers::Layer;
 use std::f64::consts::PI;
 
@@ -119,6 +119,23 @@ fn element_layer(cfg: &LayerConfig, h: f64) -> Layer {
     let mut one = cfg.clone();
     one.element_length = None;
     Layer::new(&one, h, Method::Fem, 1, &[], 0)
+}
+
+/// The first pinned–pinned frequency (Hz) of the top layer (the rail) between its discrete
+/// supports: the continuous beam's frequency (`continuous_omega2`: Euler–Bernoulli, or
+/// Timoshenko with rotary inertia) at k = π/d, d the spacing of the first two points of the
+/// first discrete coupling under it. `None` without such a coupling.
+pub fn pinned_pinned_frequency(cfg: &Config) -> Option<f64> {
+    let rail = cfg.structure.layers.first()?;
+    let support = cfg
+        .structure
+        .couplings
+        .iter()
+        .find(|c| c.upper == rail.name && c.kind == CouplingKind::Discrete)?;
+    let mut pos = support.positions.clone();
+    pos.sort_by(f64::total_cmp);
+    let d = *pos.get(1)? - pos[0];
+    (d > 0.0).then(|| continuous_omega2(&element_layer(rail, d), PI / d).sqrt() / (2.0 * PI))
 }
 
 /// The resolved band of every layer of a (validated) configuration, top layer first.

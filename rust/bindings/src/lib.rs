@@ -477,9 +477,13 @@ fn low_pass<'py>(
 }
 
 /// The band each layer of a configuration resolves (`vtb::resolution`): a list of dicts
-/// (layer, f_max, basis_f_max, time_f_max in Hz; shortest_wavelength in m), top layer first.
+/// (layer, f_max, basis_f_max, time_f_max in Hz; shortest_wavelength in m), top layer first,
+/// and the top layer's pinned–pinned frequency (Hz, or None).
 #[pyfunction]
-fn resolved_bands<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyList>> {
+fn resolved_bands<'py>(
+    py: Python<'py>,
+    config_json: &str,
+) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
     let cfg = parse_config(py, config_json)?;
     cfg.validate(&Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let out = PyList::empty(py);
@@ -492,7 +496,7 @@ fn resolved_bands<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py
         d.set_item("shortest_wavelength", b.shortest_wavelength)?;
         out.append(d)?;
     }
-    Ok(out)
+    Ok((out, vtb::resolution::pinned_pinned_frequency(&cfg)))
 }
 
 #[pymodule]
