@@ -55,3 +55,23 @@ def test_the_patch_smooths_the_crossing_without_moving_the_band_below_2khz():
     # The contact carries the same static load; the displacement under the crossing agrees.
     assert patch.contact_force[0, 0] == pytest.approx(point.contact_force[0, 0], rel=1e-12)
     assert np.abs(patch.displacement("rail")).max() == pytest.approx(np.abs(point.displacement("rail")).max(), rel=2e-3)
+
+
+def test_lockstep_jobs_on_patches_give_the_bits_of_single_runs():
+    # The patch's port vectors are shared by the lanes of a batch (the patch of the static
+    # load): jobs with different dampers and samples give bit for bit their single runs, and
+    # their band-limited indices too.
+    from vtb.tid_sweep import case_config
+
+    base = converged_short(True, t_end=0.01)
+    base.output.band_limit = 2000.0
+    base.irregularity = vtb.paper_irregularity(scale=vtb.presets.PAPER_CALIBRATED_SCALE)
+    base.tids = vtb.tids_around(base, count=2, x=21.2)
+    jobs = [case_config(base, *p) for p in ((5.0, 2e8, 1e3), (3.0, 1e8, 10.0), (8.0, 4e8, 1e4))]
+    jobs[2].irregularity.seed = 11
+    alone = [vtb.simulate(c).metrics() for c in jobs]
+    for lanes in (4, 2):
+        out = vtb.simulate_batch(jobs, threads=1, lanes=lanes)
+        for a, b in zip(alone, out):
+            assert a.keys() == b.keys() and all(np.float64(a[k]).tobytes() == np.float64(b[k]).tobytes() for k in a)
+    assert "rail_acc_max_raw" in alone[0]
