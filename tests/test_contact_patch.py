@@ -75,3 +75,23 @@ def test_lockstep_jobs_on_patches_give_the_bits_of_single_runs():
         for a, b in zip(alone, out):
             assert a.keys() == b.keys() and all(np.float64(a[k]).tobytes() == np.float64(b[k]).tobytes() for k in a)
     assert "rail_acc_max_raw" in alone[0]
+
+
+def test_patch_half_length_solves_hertzs_ellipse_equations():
+    # An independent solution of the same equations with SciPy's elliptic integrals.
+    from scipy.optimize import brentq
+    from scipy.special import ellipe, ellipk
+
+    def scipy_half(p, rw, rr, e=2.1e11, nu=0.3):
+        A, B = 0.5 / rw, 0.5 / rr
+        es, lo, hi = e / (2 * (1 - nu**2)), min(A, B), max(A, B)
+        m = brentq(lambda m: (ellipe(m) / (1 - m) - ellipk(m)) / (ellipk(m) - ellipe(m)) - hi / lo, 1e-14, 1 - 1e-14, xtol=1e-15)
+        a = (3 * p * (ellipk(m) - ellipe(m)) / (2 * np.pi * lo * es * m)) ** (1 / 3)
+        return a if A <= B else a * np.sqrt(1 - m)
+
+    for p, rw, rr in ((72e3, 0.46, 0.3), (50e3, 0.43, 0.3), (100e3, 0.46, 0.8), (72e3, 0.46, 0.05)):
+        assert vtb.contact_patch_half_length(p, rw, rr) == pytest.approx(scipy_half(p, rw, rr), rel=1e-7)
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(vtb.ConfigError) as e:
+            vtb.contact_patch_half_length(72e3, bad, 0.3)
+        assert e.value.field == "wheel_radius"

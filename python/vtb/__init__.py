@@ -31,6 +31,7 @@ from .fesea import FeSeaReport, fesea_report
 from .irregularity import Irregularity, IrregularityWarning
 from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
 from .spectra import low_pass
+from .contact import contact_patch_half_length
 from .resolution import LayerBand, ResolutionWarning, ResolvedBand, resolved_band
 from .simulate import Result, assembled_matrices, irregularity_profile, load, metric_unit, simulate, simulate_batch
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
@@ -44,5 +45,5 @@ __all__ = [
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
-    "low_pass", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
+    "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
 ]

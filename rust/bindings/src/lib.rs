@@ -499,6 +499,22 @@ fn resolved_bands<'py>(
     Ok((out, vtb::resolution::pinned_pinned_frequency(&cfg)))
 }
 
+/// Half-length (m) along the rail of the Hertz contact patch of a steel wheel of rolling
+/// radius `wheel_radius` (m) on a steel rail head of crown radius `rail_radius` (m) under
+/// `load` (N) (`vtb::contact::patch_half_length`).
+#[pyfunction]
+fn patch_half_length(py: Python<'_>, load: f64, wheel_radius: f64, rail_radius: f64) -> PyResult<f64> {
+    for (field, v) in [("load", load), ("wheel_radius", wheel_radius), ("rail_crown_radius", rail_radius)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(to_py_err(
+                py,
+                VtbError::config(field, format!("{v:?}"), "must be a finite number > 0"),
+            ));
+        }
+    }
+    Ok(vtb::contact::patch_half_length(load, wheel_radius, rail_radius))
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
@@ -512,6 +528,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_schema, m)?)?;
     m.add_function(wrap_pyfunction!(low_pass, m)?)?;
     m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;
+    m.add_function(wrap_pyfunction!(patch_half_length, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())
