@@ -1035,7 +1035,11 @@ mod tests {
             .map(|i| {
                 let s = (-a + (i as f64 + 0.5) * h) / a;
                 let xs = x + s * a;
-                if (0.0..=mesh.length).contains(&xs) { 1.0 - s * s } else { 0.0 }
+                if (0.0..=mesh.length).contains(&xs) {
+                    1.0 - s * s
+                } else {
+                    0.0
+                }
             })
             .collect();
         let total: f64 = w.iter().sum();
@@ -1096,7 +1100,9 @@ mod tests {
         for &x in &[0.101, 0.128, 0.6545 + 0.002] {
             let got = mesh.patch_flexibility(6.625e6, x, 6.4e-3);
             let mut want = 0.0;
-            brute_patch(&mesh, x, 6.4e-3, |xs, w| want += w * mesh.local_flexibility(6.625e6, xs));
+            brute_patch(&mesh, x, 6.4e-3, |xs, w| {
+                want += w * mesh.local_flexibility(6.625e6, xs)
+            });
             assert!((got - want).abs() < 1e-6 * want, "x={x}: {got} vs {want}");
         }
     }

@@ -131,10 +131,14 @@ mod tests {
         let fc = 2000.0;
         for &f in &[200.0, 1000.0, 1600.0, 2000.0, 2400.0, 3000.0] {
             let n = 40_000;
-            let x: Vec<f64> = (0..n).map(|i| (2.0 * PI * f * i as f64 * dt).sin()).collect();
+            let x: Vec<f64> = (0..n)
+                .map(|i| (2.0 * PI * f * i as f64 * dt).sin())
+                .collect();
             let y = low_pass(&x, fc, dt);
             // Amplitude over the middle half (edge transients excluded), against the gain.
-            let amp = y[n / 4..3 * n / 4].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let amp = y[n / 4..3 * n / 4]
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
             let g = gain(f, fc, dt);
             assert!((amp - g).abs() < 2e-3 * g.max(1e-3), "f={f}: {amp} vs {g}");
         }

@@ -143,7 +143,10 @@ impl RunResult {
             let d = &self.layer_disp(li, 0)[steps.clone()];
             let raw = self.layer_acc(li, 0);
             if self.band_limit.is_some() {
-                m.insert(format!("{name}_acc_max_raw"), amplitude(&raw[steps.clone()]));
+                m.insert(
+                    format!("{name}_acc_max_raw"),
+                    amplitude(&raw[steps.clone()]),
+                );
             }
             let a = &limited(raw)[steps.clone()];
             m.insert(format!("{name}_disp_max"), amplitude(d));

@@ -870,7 +870,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 for w in 0..N_WHEELS {
                     let a = self.patch[ci * N_WHEELS + w];
                     st.wheel_shape_into(xs[w], a, &mut self.wheel_shape);
-                    self.track.vector_into(&self.wheel_shape, &mut ports.vecs[w]);
+                    self.track
+                        .vector_into(&self.wheel_shape, &mut ports.vecs[w]);
                     if let (Some(rc), Some(force), Some(t)) =
                         (self.correction.as_mut(), ports.force.as_mut(), terms)
                     {

@@ -473,7 +473,10 @@ fn low_pass<'py>(
             VtbError::config("x", format!("{v:?}"), "every sample must be finite"),
         ));
     }
-    Ok(PyArray1::from_vec(py, vtb::filter::low_pass(x, band_limit, dt)))
+    Ok(PyArray1::from_vec(
+        py,
+        vtb::filter::low_pass(x, band_limit, dt),
+    ))
 }
 
 /// The band each layer of a configuration resolves (`vtb::resolution`): a list of dicts
@@ -485,7 +488,8 @@ fn resolved_bands<'py>(
     config_json: &str,
 ) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
     let cfg = parse_config(py, config_json)?;
-    cfg.validate(&Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    cfg.validate(&Profile::flat())
+        .map_err(|e| to_py_err(py, e))?;
     let out = PyList::empty(py);
     for b in vtb::resolution::resolved_bands(&cfg) {
         let d = PyDict::new(py);
@@ -503,8 +507,17 @@ fn resolved_bands<'py>(
 /// radius `wheel_radius` (m) on a steel rail head of crown radius `rail_radius` (m) under
 /// `load` (N) (`vtb::contact::patch_half_length`).
 #[pyfunction]
-fn patch_half_length(py: Python<'_>, load: f64, wheel_radius: f64, rail_radius: f64) -> PyResult<f64> {
-    for (field, v) in [("load", load), ("wheel_radius", wheel_radius), ("rail_crown_radius", rail_radius)] {
+fn patch_half_length(
+    py: Python<'_>,
+    load: f64,
+    wheel_radius: f64,
+    rail_radius: f64,
+) -> PyResult<f64> {
+    for (field, v) in [
+        ("load", load),
+        ("wheel_radius", wheel_radius),
+        ("rail_crown_radius", rail_radius),
+    ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(to_py_err(
                 py,
@@ -512,7 +525,11 @@ fn patch_half_length(py: Python<'_>, load: f64, wheel_radius: f64, rail_radius: 
             ));
         }
     }
-    Ok(vtb::contact::patch_half_length(load, wheel_radius, rail_radius))
+    Ok(vtb::contact::patch_half_length(
+        load,
+        wheel_radius,
+        rail_radius,
+    ))
 }
 
 #[pymodule]
