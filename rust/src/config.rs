@@ -1145,6 +1145,52 @@ fn value_at<'v>(tree: &'v serde_json::Value, path: &str) -> Option<&'v serde_jso
 mod tests {
     use super::*;
 
+    fn refused_field(cfg: &Config) -> Option<String> {
+        match cfg.validate(&Profile::flat()) {
+            Ok(()) => None,
+            Err(VtbError::Config { field, .. }) => Some(field),
+            Err(e) => panic!("not a ConfigError: {e}"),
+        }
+    }
+
+    #[test]
+    fn a_band_limit_must_lie_below_the_nyquist_frequency() {
+        // Δt = 5e-5 s: Nyquist 10 kHz.
+        let mut cfg = crate::presets::paper();
+        for (fc, ok) in [
+            (2000.0, true),
+            (9999.0, true),
+            (10000.0, false),
+            (0.0, false),
+            (-1.0, false),
+            (f64::NAN, false),
+        ] {
+            cfg.output.band_limit = Some(fc);
+            let got = refused_field(&cfg);
+            assert_eq!(got.is_none(), ok, "{fc}: {got:?}");
+            if let Some(f) = got {
+                assert_eq!(f, "output.band_limit");
+            }
+        }
+    }
+
+    #[test]
+    fn a_contact_patch_needs_a_finite_element_rail() {
+        let mut cfg = crate::presets::paper();
+        cfg.vehicles[0].contact_patch = true;
+        assert_eq!(
+            refused_field(&cfg).as_deref(),
+            Some("vehicles[0].contact_patch")
+        );
+        assert_eq!(refused_field(&crate::presets::paper_converged()), None);
+        cfg.discretisation.method = Method::Fem;
+        cfg.vehicles[0].rail_crown_radius = 0.0;
+        assert_eq!(
+            refused_field(&cfg).as_deref(),
+            Some("vehicles[0].rail_crown_radius")
+        );
+    }
+
     #[test]
     fn irregularity_share_is_a_smooth_ramp_over_the_fade_distance() {
         let mut cfg = crate::presets::paper();
