@@ -12,7 +12,6 @@ the functions that answer at given frequencies (:func:`vtb.receptance`, :func:`v
 from __future__ import annotations
 
 import json
-import math
 import warnings
 from dataclasses import dataclass
 from typing import Optional
@@ -79,12 +78,13 @@ def _core_bands(config: Config) -> tuple[list, Optional[float]]:
     """The core's bands and pinned–pinned frequency of ``config``: its structure and time step,
     as a structure-only configuration (what the frequency-domain tools assemble) with the
     run's Δt."""
+    from .simulate import _real
     from .track import _structure_json
 
     plain = json.loads(_structure_json(config))
-    dt = getattr(config.solver, "dt", None)
-    if isinstance(dt, (int, float)) and not isinstance(dt, bool) and math.isfinite(dt) and dt > 0:
-        plain["solver"]["dt"] = plain["solver"]["t_end"] = float(dt)
+    dt = _real(getattr(config.solver, "dt", None))
+    if dt is not None and dt > 0:
+        plain["solver"]["dt"] = plain["solver"]["t_end"] = dt
     return _core.resolved_bands(json.dumps(plain))
 
 

@@ -672,8 +672,16 @@ impl FemBasis {
         out.values.clear();
         out.values.resize(2 * (e1 - e0 + 2), 0.0);
         let values = &mut out.values;
+        // The element's coefficients once per piece, not per Gauss point.
+        let mut element = (usize::MAX, [[0.0; 4]; 4]);
         self.patch_average(x, a, |e, xs, w| {
-            let [wf, _] = interdependent(self.nodes[e + 1] - self.nodes[e], self.phi[e]);
+            if element.0 != e {
+                element = (
+                    e,
+                    interdependent(self.nodes[e + 1] - self.nodes[e], self.phi[e])[0],
+                );
+            }
+            let wf = &element.1;
             let xi = xs - self.nodes[e];
             for (j, c) in wf.iter().enumerate() {
                 values[2 * (e - e0) + j] += w * (c[0] + xi * (c[1] + xi * (c[2] + xi * c[3])));
