@@ -79,3 +79,15 @@ def test_the_article_chain_summary_matches_its_report(quick):
 def test_the_study_refuses_to_overwrite_a_report(quick, capsys):
     assert cli.main(["study", "robust", "--out", str(quick), "--quick", "--no-progress"]) == 2
     assert "--force" in capsys.readouterr().err
+
+
+def test_a_resumed_level_search_runs_nothing(quick, monkeypatch):
+    def no_runs(*args, **kwargs):
+        raise AssertionError("a resumed level search ran the model")
+
+    monkeypatch.setattr(study, "simulate_batch", no_runs)
+    factor, rows = study.no_loss_level(study.PLANS["quick"], False, quick / "levels.json")
+    saved = _rows(quick / "levels.csv")
+    assert [float(r["rail_acc_max"]) for r in saved] == pytest.approx([r["rail_acc_max"] for r in rows], rel=1e-12)
+    ok = [float(r["factor"]) for r in saved if float(r["contact_loss_events"]) == 0 and float(r["factor"]) > 0]
+    assert factor == (max(ok) if ok else min(study.LEVEL_FACTORS))

@@ -94,11 +94,12 @@ def _grid(cfg, grid: dict) -> tuple:
     return tuple(grid["b_t"]), tuple(k), tuple(grid["c_t"])
 
 
-def no_loss_level(plan: dict, progress: bool) -> tuple:
+def no_loss_level(plan: dict, progress: bool, path: Path) -> tuple:
     """The largest factor of :data:`LEVEL_FACTORS` at which the uncontrolled converged run at
     the design speed (80 m/s, the article's sample) has no contact-loss event; and the rows
     of every level tried, with a smooth-rail run (factor 0: no irregularity) showing what the
-    discrete fastener support alone excites."""
+    discrete fastener support alone excites. The rows are kept in ``path`` and reused when it
+    holds the same configurations (a resumed study)."""
     cfgs = []
     for f in LEVEL_FACTORS + (0.0,):
         c = _converged(plan, f if f > 0 else 1.0)
@@ -106,10 +107,16 @@ def no_loss_level(plan: dict, progress: bool) -> tuple:
             c.irregularity = Irregularity(kind="none")
         c.tids = None
         cfgs.append(c)
-    runs = simulate_batch(cfgs, progress=progress)
-    rows = [dict(factor=f, scale=c.irregularity.scale if f > 0 else 0.0, rail_acc_max=r["rail_acc_max"], slab_acc_max=r["slab_acc_max"],
-                 contact_force_min=r["contact_force_min"], contact_loss_events=r["contact_loss_events"])
-            for f, c, r in zip(LEVEL_FACTORS + (0.0,), cfgs, runs)]
+    key = [config_stamp(c) for c in cfgs]
+    saved = json.loads(path.read_text()) if path.exists() else None
+    if saved is not None and saved["key"] == key:
+        rows = saved["rows"]
+    else:
+        runs = simulate_batch(cfgs, progress=progress)
+        rows = [dict(factor=f, scale=c.irregularity.scale if f > 0 else 0.0, rail_acc_max=r["rail_acc_max"], slab_acc_max=r["slab_acc_max"],
+                     contact_force_min=r["contact_force_min"], contact_loss_events=r["contact_loss_events"])
+                for f, c, r in zip(LEVEL_FACTORS + (0.0,), cfgs, runs)]
+        path.write_text(json.dumps(dict(key=key, rows=rows)) + "\n")
     ok = [r["factor"] for r in rows if r["contact_loss_events"] == 0 and r["factor"] > 0]
     return (max(ok) if ok else min(LEVEL_FACTORS)), rows
 
@@ -159,7 +166,7 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
 
     # 2. The converged preset at the calibrated level and without contact loss.
     t0 = time.perf_counter()
-    factor, levels = no_loss_level(plan, progress)
+    factor, levels = no_loss_level(plan, progress, out / "levels.json")
     reproduce._write_csv(out / "levels.csv", levels)
     times["2a. level without contact loss"] = time.perf_counter() - t0
     chains = {}
