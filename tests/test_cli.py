@@ -51,3 +51,25 @@ def test_reproduce_quick(tmp_path):
     gaps = text.split("## The gaps between vtb and the article, and the evidence")[1].split("## Run times")[0]
     for gap in ("Rail displacement", "Slab acceleration", "Rail r.m.s. and stabilisation time", "The best sweep case", "The MOGA optimum", "Car body"):
         assert f"**{gap}" in gaps, gap
+
+
+def test_simulate_says_what_it_runs_and_how_it_relates_to_the_article():
+    """`vtb simulate` (the README's first command) names its model, what it resolves, its
+    irregularity level, and that the article's published numbers need the calibrated level;
+    `--config article` says which number is fitted and which are out-of-sample."""
+    import vtb
+    from vtb.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config
+
+    raw = "\n".join(cli._describe(vtb.paper_config(), "default"))
+    assert "FE–SEA hybrid" in raw and "level ×1" in raw
+    assert "does not hold the rail's pinned–pinned mode" in raw
+    assert f"{ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}" in raw
+    assert "vtb simulate --config article" in raw
+    calibrated = "\n".join(cli._describe(example_config("article"), "article"))
+    assert f"level ×{PAPER_CALIBRATED_SCALE}" in calibrated and "the one fitted number" in calibrated
+    assert "out-of-sample" in calibrated
+    converged = "\n".join(cli._describe(example_config("article_converged"), "article_converged"))
+    assert "Timoshenko rail" in converged and "low-passed at 2000 Hz" in converged
+    assert "this converged model differs by design" in converged
+    other = "\n".join(cli._describe(example_config("two_span_sato"), "two_span_sato"))
+    assert "article" not in other.split("irregularity")[1]

@@ -97,6 +97,66 @@ def _print_metrics(metrics: dict, out=None) -> None:
         print(f"{k:<{width}}  {v:<12.6g} {metric_unit(k)}", file=out)
 
 
+def _rounded(cfg) -> str:
+    """A configuration's JSON with every number to 12 significant digits: the shipped TOML
+    examples write the presets' fastener positions (i·0.64 m) rounded."""
+    import dataclasses
+
+    def walk(v):
+        if isinstance(v, float):
+            return float(f"{v:.12g}")
+        if isinstance(v, dict):
+            return {k: walk(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [walk(x) for x in v]
+        return v
+
+    return json.dumps(walk(dataclasses.asdict(cfg)), sort_keys=True)
+
+
+def _describe(cfg, label: str) -> list[str]:
+    """What a run is: its model and what it resolves, its excitation, and how its numbers
+    relate to the article's published ones (``#`` lines printed before the metrics)."""
+    from .presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config
+    from .reproduce import ARTICLE_33
+    from .resolution import resolved_band
+
+    d = cfg.discretisation
+    rail = cfg.structure.layers[0]
+    if d.method == "fem":
+        shear = "Timoshenko" if rail.shear_modulus is not None else "Euler–Bernoulli"
+        model = f"finite elements ({shear} rail, elements ≤ {rail.element_length or cfg.structure.length / d.fem_elements:.3g} m)"
+    elif d.method == "hybrid":
+        model = f"the FE–SEA hybrid ({rail.modes} global + {rail.local_modes} local sines on the rail)"
+    else:
+        model = f"modal ({rail.modes} sines on the rail)"
+    lines = [f"# {label}: {model}, Δt = {cfg.solver.dt:g} s, {cfg.speed:g} m/s, {len(cfg.vehicles)} car{'' if len(cfg.vehicles) == 1 else 's'}, observed at x = {', '.join(f'{x:g}' for x in cfg.output.points)} m"]
+    band = resolved_band(cfg)
+    held = ", ".join(f"{b.layer} to {b.f_max:.0f} Hz" for b in band.layers.values())
+    pp = "" if band.pinned_pinned is None else (
+        f"; it {'holds' if band.holds_pinned_pinned else 'does not hold'} the rail's pinned–pinned mode ({band.pinned_pinned:.0f} Hz)")
+    limit = cfg.output.band_limit
+    lines.append(f"# it resolves {held}{pp}; "
+                 + (f"accelerations low-passed at {limit:g} Hz" if limit else "indices of the unfiltered records"))
+    irr = cfg.irregularity
+    if irr is not None:
+        lines.append(f"# irregularity: {irr.kind}, wavelengths {irr.wavelength_min:g}–{irr.wavelength_max:g} m, seed {irr.seed}, level ×{irr.scale:g}")
+    for model_name in ("article", "converged"):
+        for calibrated in (False, True):
+            if _rounded(cfg) != _rounded(paper_config(calibrated=calibrated, model=model_name)):
+                continue
+            if not calibrated:
+                lines.append(f"# this is the raw spectrum level (×1). The article does not state its level; its published "
+                             f"rail_acc_max {ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}: "
+                             f"vtb simulate --config article{'_converged' if model_name == 'converged' else ''}. No number below is the article's.")
+            else:
+                published = ", ".join(f"{k} {v[0]:g}" for k, v in ARTICLE_33.items())
+                lines.append(f"# the level ×{PAPER_CALIBRATED_SCALE} is fitted so that the article model's rail_acc_max is the article's "
+                             f"{ARTICLE_RAIL_ACC} m/s² (the one fitted number); the article publishes {published} (SI units), "
+                             "out-of-sample comparisons" + (" for its hybrid model: this converged model differs by design (docs/validation.md)" if model_name == "converged" else ""))
+    return lines
+
+
 def cmd_simulate(args) -> int:
     if args.out:
         check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
@@ -106,7 +166,9 @@ def cmd_simulate(args) -> int:
     t0 = time.perf_counter()
     res = simulate(cfg)
     elapsed = time.perf_counter() - t0
-    print(f"# {'article case (paper_config)' if args.config is None else args.config}: {len(res.t) - 1} steps in {elapsed:.2f} s")
+    label = "the article's case (vtb.paper_config())" if args.config is None else args.config
+    print("\n".join(_describe(cfg, label)))
+    print(f"# {len(res.t) - 1} steps in {elapsed:.2f} s")
     _print_metrics(res.metrics())
     if args.out:
         out = Path(args.out)
