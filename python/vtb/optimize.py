@@ -121,6 +121,19 @@ class OptimizationResult:
             "best η_r": int(np.argmax(self.pareto["eta_r"])),
         }
 
+    def to_pandas(self):
+        """The returned set (:attr:`pareto`) as a DataFrame, one row per design, units in
+        ``attrs["units"]`` (needs pandas)."""
+        from .tables import frame, units_of
+
+        return frame(self.pareto, units_of(self.pareto))
+
+    def to_parquet(self, path) -> None:
+        """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
+        from .tables import to_parquet
+
+        to_parquet(self.to_pandas(), path)
+
     def table(self) -> list:
         """Rows shaped like the article's Table 3, one per trade-off choice."""
         rows = []

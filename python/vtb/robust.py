@@ -235,9 +235,18 @@ class DesignEvaluation:
         return out
 
     def to_pandas(self):
-        import pandas as pd
+        """One row per case, units in ``attrs["units"]`` (needs pandas)."""
+        from .tables import frame, units_of
 
-        return pd.DataFrame(self.rows)
+        df = frame(self.rows)
+        df.attrs["units"] = units_of(df.columns)
+        return df
+
+    def to_parquet(self, path) -> None:
+        """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
+        from .tables import to_parquet
+
+        to_parquet(self.to_pandas(), path)
 
 
 def evaluate_designs(
@@ -335,6 +344,19 @@ class RobustSweep:
         """The feasible design (statistic constraints, :func:`design_statistics`) with the
         lowest statistic of a_rm/a_rm0, with its statistics."""
         return _best_of(self.table(statistic_name, speed))
+
+    def to_pandas(self, statistic_name: Optional[str] = None, speed: Optional[float] = None):
+        """:meth:`table` as a DataFrame, one row per design, units in ``attrs["units"]``."""
+        from .tables import frame, units_of
+
+        t = self.table(statistic_name, speed)
+        return frame(t, units_of(t))
+
+    def to_parquet(self, path, statistic_name: Optional[str] = None, speed: Optional[float] = None) -> None:
+        """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
+        from .tables import to_parquet
+
+        to_parquet(self.to_pandas(statistic_name, speed), path)
 
 
 def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name: str = "mean",

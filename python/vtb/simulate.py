@@ -84,7 +84,11 @@ def _profile_args(profile: tuple) -> tuple:
     return x0, dx, values if values.size else None
 
 
-@dataclass
+#: Names of the 10 vehicle DOFs in the order of ``Result.vehicle_disp``.
+VEHICLE_DOFS = ("Z_c", "beta_c", "Z_t1", "beta_t1", "Z_t2", "beta_t2", "Z_w1", "Z_w2", "Z_w3", "Z_w4")
+
+
+@dataclass(eq=False)
 class Result:
     """Histories of one run, sampled at ``t`` (s).
 
@@ -125,6 +129,56 @@ class Result:
         ``{layer}_acc_max_raw`` (m/s²).
         """
         return dict(self._metrics)
+
+    #: The array fields compared by value in ``==``.
+    _ARRAYS = ("t", "disp", "acc", "vehicle_disp", "vehicle_acc", "contact_force")
+
+    def __eq__(self, other) -> bool:
+        """Equal by value: the same configuration, the same histories bit for bit (``np.array_equal``),
+        contact-loss periods, layers, points and metrics. A result is mutable: it has no hash."""
+        if not isinstance(other, Result):
+            return NotImplemented
+        return (all(np.array_equal(getattr(self, f), getattr(other, f)) for f in self._ARRAYS)
+                and self.contact_loss == other.contact_loss and list(self.layer_names) == list(other.layer_names)
+                and list(self.points) == list(other.points) and self._metrics == other._metrics and self.config == other.config)
+
+    __hash__ = None
+
+    def to_pandas(self):
+        """The histories as a :class:`pandas.DataFrame` indexed by ``t`` (s): per layer and
+        observation point ``{layer}_disp@{x}`` (m) and ``{layer}_acc@{x}`` (m/s²); per car
+        ``car{i}_{dof}`` displacement (m or rad, relative to the static state) and
+        ``car{i}_{dof}_acc`` (m/s² or rad/s²) for the DOFs Z_c, beta_c, Z_t1, beta_t1, Z_t2, beta_t2,
+        Z_w1..Z_w4; ``contact_force_{w}`` (N) per wheelset. Units in ``attrs["units"]``
+        (needs pandas)."""
+        from .tables import frame
+
+        cols, units = {}, {}
+        for li, name in enumerate(self.layer_names):
+            for pi, x in enumerate(self.points):
+                for q, arr, unit in (("disp", self.disp, "m"), ("acc", self.acc, "m/s²")):
+                    key = f"{name}_{q}@{x:g}"
+                    cols[key], units[key] = arr[:, li, pi], unit
+        for ci in range(self.vehicle_disp.shape[1]):
+            for di, dof in enumerate(VEHICLE_DOFS):
+                rot = dof.startswith("beta")
+                for key, arr, unit in ((f"car{ci}_{dof}", self.vehicle_disp, "rad" if rot else "m"),
+                                       (f"car{ci}_{dof}_acc", self.vehicle_acc, "rad/s²" if rot else "m/s²")):
+                    cols[key], units[key] = arr[:, ci, di], unit
+        for w in range(self.contact_force.shape[1]):
+            cols[f"contact_force_{w}"], units[f"contact_force_{w}"] = self.contact_force[:, w], "N"
+        df = frame(cols, units)
+        df.index = self.t
+        df.index.name = "t"
+        df.attrs["units"]["t"] = "s"
+        return df
+
+    def to_parquet(self, path) -> None:
+        """The histories of :meth:`to_pandas` as a Parquet file, units in its metadata
+        (needs pyarrow; :func:`vtb.read_parquet` reads it back)."""
+        from .tables import to_parquet
+
+        to_parquet(self.to_pandas(), path)
 
     def __repr__(self) -> str:
         top = self.layer_names[0] if self.layer_names else ""

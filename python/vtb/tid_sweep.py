@@ -34,6 +34,7 @@ from .moga import write_atomically
 from .presets import tids_around
 from .resolution import pinned_pinned_frequency
 from .simulate import simulate_batch
+from .tables import units_of
 
 #: The article's grid: b_t = 1..10 kg; k_t = 1..9 × 10^4..10^8 and 1e9 N/m; c_t = 10..1e4 N·s/m.
 ARTICLE_B = tuple(float(b) for b in range(1, 11))
@@ -88,20 +89,20 @@ class SweepResult:
         return (self.columns["case"] > 0) & (self.columns["error"] == "")
 
     def to_pandas(self):
-        import pandas as pd
+        """The columns as a DataFrame, metric units in ``attrs["units"]`` (needs pandas)."""
+        from .tables import frame
 
-        return pd.DataFrame(self.columns)
+        return frame(self.columns, units_of(self.columns))
 
     def to_csv(self, path) -> None:
         """CSV export of the columns (with the case numbers; not a journal)."""
         Path(path).write_text(_csv_text([dict(zip(COLUMNS, row)) for row in zip(*(self.columns[c] for c in COLUMNS))], COLUMNS, header=True))
 
     def to_parquet(self, path) -> None:
-        """Parquet export (needs pyarrow)."""
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+        """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
+        from .tables import to_parquet
 
-        pq.write_table(pa.table({k: np.asarray(v) for k, v in self.columns.items()}), str(path))
+        to_parquet(self.to_pandas(), path)
 
     # ------------------------------------------------------------------ analyses
     def best_per_inertance(self) -> dict:
