@@ -111,7 +111,9 @@ class Structure(StrictFields):
 @dataclass
 class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
-    FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements)."""
+    FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements).
+    ``synthesis_cutoff`` (Hz): run a finite-element structure by complex-modal synthesis
+    (:mod:`vtb.synthesis`) instead of stepping its elements."""
 
     method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
     fem_elements: int = _default("DiscretisationConfig", "fem_elements")
@@ -119,6 +121,7 @@ class Discretisation(StrictFields):
     fesea_coupling: Literal["full", "mass"] = _default("DiscretisationConfig", "fesea_coupling")
     local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
     element_flexibility: bool = _default("DiscretisationConfig", "element_flexibility")
+    synthesis_cutoff: Optional[float] = _default("DiscretisationConfig", "synthesis_cutoff")
 
 
 @documented("VehicleConfig")

@@ -336,8 +336,17 @@ def _result(out: dict, config: Config) -> Result:
 def simulate(config: Config) -> Result:
     """Runs one configuration (Ctrl-C interrupts it)."""
     text, profile = _prepare(config)
-    out = _core.simulate(text, *_profile_args(profile))
+    out = _core.simulate(text, *_profile_args(profile), reduction=_reduction(config))
     return _result(out, config)
+
+
+def _reduction(config: Config):
+    """The core reduction a configuration with ``discretisation.synthesis_cutoff`` runs on."""
+    if config.discretisation.synthesis_cutoff is None:
+        return None
+    from .synthesis import reduction
+
+    return reduction(config).to_core()
 
 
 #: The widest lockstep group by default (measured: ``cargo bench --bench lockstep``).
@@ -404,13 +413,40 @@ def simulate_batch(
 
     elif callable(progress):
         callback = progress
+    # One core batch per reduction (the jobs on the Newmark engine form one of their own).
+    groups: dict = {}
+    for j, i in enumerate(order):
+        cfg = configs[i]
+        key = None if cfg.discretisation.synthesis_cutoff is None else cfg.discretisation.synthesis_cutoff
+        try:
+            red = _reduction(cfg)
+        except VtbError as e:
+            if on_error == "raise":
+                raise
+            results[i] = e
+            continue
+        groups.setdefault(id(red) if red is not None else key, (red, []))[1].append(j)
+    out: list = [None] * len(jsons)
+    offset = 0
+
+    def shifted(done, _cb=callback):
+        if _cb is not None:
+            _cb(offset + done)
+
     try:
-        out = _core.batch(jsons, profiles, profile_index, threads or 0, callback, histories, lanes)
+        for red, members in groups.values():
+            got = _core.batch([jsons[j] for j in members], profiles, [profile_index[j] for j in members], threads or 0,
+                              shifted if callback else None, histories, lanes, reduction=red)
+            for j, r in zip(members, got):
+                out[j] = r
+            offset += len(members)
     finally:
         if bar is not None:
             bar.update(len(jsons) - bar.n)
             bar.close()
     for i, r in zip(order, out):
+        if r is None:  # its reduction failed (kept above)
+            continue
         if isinstance(r, BaseException) and on_error == "raise":
             raise r
         results[i] = _result(r, configs[i]) if histories and isinstance(r, dict) else r

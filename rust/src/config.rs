@@ -177,6 +177,12 @@ pub struct DiscretisationConfig {
     /// wheel's position in its element (docs/track-models.md).
     #[serde(default = "default_true")]
     pub element_flexibility: bool,
+    /// Cut-off (Hz) of the complex-modal synthesis of a finite-element structure: `None` steps
+    /// the finite elements (Newmark); f_c keeps the complex modes with |λ| < 2π·f_c plus the
+    /// rail's static residual, and steps each mode exactly (docs/synthesis.md). Needs
+    /// `method = "fem"` and the structure's reduction (`vtb.synthesis.reduction`).
+    #[serde(default)]
+    pub synthesis_cutoff: Option<f64>,
 }
 
 fn default_true() -> bool {
@@ -209,6 +215,7 @@ impl Default for DiscretisationConfig {
             fesea_coupling: FeSeaCoupling::Full,
             local_deflection: true,
             element_flexibility: true,
+            synthesis_cutoff: None,
         }
     }
 }
@@ -785,6 +792,20 @@ impl Config {
             }
         }
         let d = &self.discretisation;
+        if let Some(fc) = d.synthesis_cutoff {
+            let fc = positive("discretisation.synthesis_cutoff", fc)?;
+            if d.method != Method::Fem {
+                return Err(VtbError::config(
+                    "discretisation.synthesis_cutoff",
+                    fc,
+                    format!(
+                        "the synthesis reduces a finite-element structure (discretisation.method = \
+                         \"fem\", not {:?})",
+                        d.method
+                    ),
+                ));
+            }
+        }
         if d.method == Method::Fem && !(2..=MAX_ELEMENTS).contains(&d.fem_elements) {
             return Err(VtbError::config(
                 "discretisation.fem_elements",

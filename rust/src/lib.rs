@@ -31,10 +31,11 @@ pub mod simd;
 pub mod simulate;
 pub mod sparse;
 pub mod structure;
+pub mod synthesis;
 pub mod vehicle;
 
 pub use config::{Config, Profile};
 pub use error::{Result, VtbError};
 pub use model::Model;
 pub use results::{Record, RunResult};
-pub use simulate::{BatchOptions, Job, run_batch, simulate};
+pub use simulate::{BatchOptions, Job, run_batch, run_batch_with, simulate, simulate_with};

@@ -10,6 +10,7 @@ use crate::integrator::{DamperParams, GW, Newmark, PortBlock};
 use crate::model::Model;
 use crate::results::{ContactLoss, Record, RunResult};
 use crate::sparse::{Assembler, CsrMatrix, Ldlt};
+use crate::synthesis::{self, Reduction};
 use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -18,14 +19,53 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// Validates, assembles and integrates one configuration.
 pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+    simulate_with(cfg, profile, None, cancel)
+}
+
+/// `simulate` with the structure's reduction, which a configuration with
+/// `discretisation.synthesis_cutoff` needs.
+pub fn simulate_with(
+    cfg: &Config,
+    profile: &Profile,
+    reduction: Option<&Reduction>,
+    cancel: Option<&AtomicBool>,
+) -> Result<RunResult> {
     let model = Model::new(cfg.clone(), profile.clone())?;
-    Simulation::new(&model)?.run(cancel)
+    match engine(cfg, reduction)? {
+        Some(red) => synthesis::run(
+            &model,
+            &LaneSpec::of(cfg, profile),
+            red,
+            Record::Full,
+            cancel,
+        ),
+        None => Simulation::new(&model)?.run(cancel),
+    }
+}
+
+/// The reduction a configuration runs on (`None`: the Newmark engine); a synthesis without
+/// its reduction, or a reduction for a configuration without synthesis, is refused.
+fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&'r Reduction>> {
+    match (cfg.discretisation.synthesis_cutoff, reduction) {
+        (Some(_), Some(r)) => Ok(Some(r)),
+        (None, None) => Ok(None),
+        (Some(fc), None) => Err(VtbError::config(
+            "discretisation.synthesis_cutoff",
+            fc,
+            "the synthesis needs the structure's reduction (vtb.synthesis.reduction(config))",
+        )),
+        (None, Some(_)) => Err(VtbError::config(
+            "discretisation.synthesis_cutoff",
+            "None",
+            "a reduction was given for a configuration that does not ask for the synthesis",
+        )),
+    }
 }
 
 /// Steps between polls of the cancel flag (well under a second on every model).
-const CANCEL_POLL: usize = 64;
+pub(crate) const CANCEL_POLL: usize = 64;
 /// Steps between checks that every state is finite.
-const FINITE_POLL: usize = 1024;
+pub(crate) const FINITE_POLL: usize = 1024;
 /// The widest lockstep group the engine compiles.
 pub const MAX_LANES: usize = 8;
 /// The default widest group, chosen by measurement (`cargo bench --bench lockstep`, docs).
@@ -118,12 +158,28 @@ pub fn run_batch(
     cancel: Option<&AtomicBool>,
     done: Option<&AtomicUsize>,
 ) -> Vec<Result<RunResult>> {
+    run_batch_with(jobs, opts, None, cancel, done)
+}
+
+/// `run_batch` with the structure's reduction for jobs that ask for the synthesis (each job
+/// then runs alone on its group's shared model; the reduction is shared by all).
+pub fn run_batch_with(
+    jobs: &[Job],
+    opts: BatchOptions,
+    reduction: Option<&Reduction>,
+    cancel: Option<&AtomicBool>,
+    done: Option<&AtomicUsize>,
+) -> Vec<Result<RunResult>> {
     let record = opts.record;
     let mut out: Vec<Option<Result<RunResult>>> = (0..jobs.len()).map(|_| None).collect();
     let mut keys: BTreeMap<String, usize> = BTreeMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, job) in jobs.iter().enumerate() {
-        if let Err(e) = job.config.validate(&job.profile) {
+        if let Err(e) = job
+            .config
+            .validate(&job.profile)
+            .and_then(|_| engine(&job.config, reduction).map(|_| ()))
+        {
             out[i] = Some(Err(e));
             continue;
         }
@@ -146,7 +202,11 @@ pub fn run_batch(
             };
             let mut chunks = Vec::new();
             let mut at = 0;
-            for w in lane_widths(members.len(), threads, opts.max_lanes) {
+            let widths = match reduction {
+                Some(_) => vec![1; members.len()],
+                None => lane_widths(members.len(), threads, opts.max_lanes),
+            };
+            for w in widths {
                 chunks.push(&members[at..at + w]);
                 at += w;
             }
@@ -156,7 +216,16 @@ pub fn run_batch(
                     let res = match &model {
                         Err(e) => vec![Err(e.clone()); chunk.len()],
                         Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                        Ok(m) => run_lanes(m, jobs, chunk, record, cancel),
+                        Ok(m) => match reduction {
+                            Some(red) => chunk
+                                .iter()
+                                .map(|&i| {
+                                    let spec = LaneSpec::of(&jobs[i].config, &jobs[i].profile);
+                                    synthesis::run(m, &spec, red, record, cancel)
+                                })
+                                .collect(),
+                            None => run_lanes(m, jobs, chunk, record, cancel),
+                        },
                     };
                     if let Some(d) = done {
                         d.fetch_add(chunk.len(), Ordering::Relaxed);
@@ -209,30 +278,48 @@ fn run_lanes(
 
 /// A constant force moving with the common speed.
 #[derive(Clone, Copy, Debug)]
-struct Mover {
-    layer: usize,
-    x0: f64,
-    magnitude: f64,
+pub(crate) struct Mover {
+    pub(crate) layer: usize,
+    pub(crate) x0: f64,
+    pub(crate) magnitude: f64,
+}
+
+impl Mover {
+    /// The moving forces of a configuration.
+    pub(crate) fn all(cfg: &Config) -> Vec<Mover> {
+        cfg.forces
+            .iter()
+            .map(|f| Mover {
+                layer: f
+                    .layer
+                    .as_ref()
+                    .and_then(|l| cfg.layer_index(l))
+                    .unwrap_or(0),
+                x0: f.x0,
+                magnitude: f.magnitude,
+            })
+            .collect()
+    }
 }
 
 /// A car's own Newmark stepper (one lane per job); its contact ports are the wheelset DOFs.
-struct CarRun<const W: usize> {
-    car: Car,
-    nm: Newmark<W>,
+pub(crate) struct CarRun<const W: usize> {
+    pub(crate) car: Car,
+    pub(crate) nm: Newmark<W>,
     m: CsrMatrix,
     k: CsrMatrix,
-    ports: PortBlock<W>,
+    pub(crate) ports: PortBlock<W>,
     /// Wheelset compliance over one step for unit port forces (constant, the same in every
     /// lane).
-    compliance: [[f64; GW]; GW],
-    gravity: Vec<f64>,
-    f_prev: Vec<f64>,
+    pub(crate) compliance: [[f64; GW]; GW],
+    pub(crate) gravity: Vec<f64>,
+    pub(crate) f_prev: Vec<f64>,
     /// The static state of each lane (`[dof·W + lane]`).
-    z0: Vec<f64>,
+    pub(crate) z0: Vec<f64>,
 }
 
 impl<const W: usize> CarRun<W> {
-    fn new(car: &Car, dt: f64, g: f64) -> Result<Self> {
+    pub(crate) fn new(car: &Car, dt: f64, g: f64) -> Result<Self> {
         let dense = |m: &[[f64; N_DOF]; N_DOF]| {
             let mut a = Assembler::new(N_DOF);
             for i in 0..N_DOF {
@@ -277,8 +364,33 @@ impl<const W: usize> CarRun<W> {
         })
     }
 
+    /// Lane `lane` at rest in static equilibrium on wheel contacts whose rail side (rail
+    /// displacement plus irregularity, m) is `rail`, under the static wheel loads `loads` (N).
+    pub(crate) fn set_static(
+        &mut self,
+        lane: usize,
+        rail: [f64; N_WHEELS],
+        loads: &[f64],
+        g: f64,
+    ) -> Result<()> {
+        let zw: [f64; N_WHEELS] =
+            std::array::from_fn(|w| rail[w] + compression(self.car.hertz_g, loads[w]));
+        let (_, z) = self.car.static_state(g, &zw);
+        let mut f = self.car.gravity(g);
+        for w in 0..N_WHEELS {
+            f[WHEEL0 + w] -= self.car.rails * loads[w];
+        }
+        let av = accelerations(&self.m, &self.k, &z, &f)?;
+        self.nm
+            .set_state(lane, &z, &[0.0; N_DOF], &av, &self.k, &self.m);
+        for i in 0..N_DOF {
+            self.z0[i * W + lane] = z[i];
+        }
+        Ok(())
+    }
+
     /// Gravity minus rails·P on the wheelsets (stepper coordinates) into `f_prev`.
-    fn set_force(&mut self, p: &[[f64; GW]; W]) {
+    pub(crate) fn set_force(&mut self, p: &[[f64; GW]; W]) {
         self.f_prev.clone_from(&self.gravity);
         for (lane, pl) in p.iter().enumerate() {
             for w in 0..N_WHEELS {
@@ -358,7 +470,7 @@ impl RailCorrection<'_> {
 
 /// Static wheel loads on the modelled rail (N) of every car's wheelsets, from the statics of
 /// each (statically determinate) car.
-fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
+pub(crate) fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
     cars.iter()
         .flat_map(|c| {
             let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
@@ -369,6 +481,53 @@ fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Opens and closes the contact-loss periods of one run at t1 from its wheel forces `p`.
+pub(crate) fn note_contact(
+    loss_open: &mut [Option<f64>],
+    p: &[f64],
+    t1: f64,
+    out: &mut Vec<ContactLoss>,
+) {
+    for (wi, open) in loss_open.iter_mut().enumerate() {
+        match (p[wi] == 0.0, *open) {
+            (true, None) => *open = Some(t1),
+            (false, Some(t0)) => {
+                out.push(ContactLoss {
+                    wheel: wi,
+                    t_start: t0,
+                    t_end: Some(t1),
+                });
+                *open = None;
+            }
+            _ => {}
+        }
+    }
+}
+
+/// A finished run: its open contact-loss periods closed at the end, and refused when an
+/// index overflowed.
+pub(crate) fn finish(loss_open: &[Option<f64>], mut r: RunResult) -> Result<RunResult> {
+    for (wi, open) in loss_open.iter().enumerate() {
+        if let Some(t0) = open {
+            r.contact_loss.push(ContactLoss {
+                wheel: wi,
+                t_start: *t0,
+                t_end: None,
+            });
+        }
+    }
+    // A finite state can still give an overflowing index (an acceleration of 1e308 squared
+    // in an r.m.s.): never return it as a result.
+    if let Some((name, v)) = r.metrics().into_iter().find(|(_, v)| !v.is_finite()) {
+        return Err(VtbError::Solver(format!(
+            "the index {name} = {v} is not finite at the end of the run (step {}): an \
+             overflow, most likely from parameters of extreme magnitude",
+            r.n_steps
+        )));
+    }
+    Ok(r)
 }
 
 /// A lane's own data: its irregularity, contact iteration, damper parameters, result, and
@@ -480,19 +639,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 track.observe(&st.shape(li, x));
             }
         }
-        let movers: Vec<Mover> = cfg
-            .forces
-            .iter()
-            .map(|f| Mover {
-                layer: f
-                    .layer
-                    .as_ref()
-                    .and_then(|l| cfg.layer_index(l))
-                    .unwrap_or(0),
-                x0: f.x0,
-                magnitude: f.magnitude,
-            })
-            .collect();
+        let movers = Mover::all(cfg);
         let cars = model
             .cars
             .iter()
@@ -761,25 +908,14 @@ impl<'m, const W: usize> Simulation<'m, W> {
         self.track.set_state(j, &u0, &vec![0.0; n], &a0, k_l, m_l);
         let profile = self.lanes[j].profile;
         for (ci, c) in self.cars.iter_mut().enumerate() {
-            let mut zw = [0.0; N_WHEELS];
-            for w in 0..N_WHEELS {
+            let mut rail = [0.0; N_WHEELS];
+            for (w, r) in rail.iter_mut().enumerate() {
                 let x = c.car.wheel_x0[w];
-                let p0 = loads[ci * N_WHEELS + w];
                 st.wheel_shape_into(x, self.patch[ci * N_WHEELS + w], &mut self.wheel_shape);
-                zw[w] = dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
-                    + cfg.irregularity_share(0.0) * profile.at(x)
-                    + compression(c.car.hertz_g, p0);
+                *r = dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
+                    + cfg.irregularity_share(0.0) * profile.at(x);
             }
-            let (_, z) = c.car.static_state(g, &zw);
-            let mut f = c.car.gravity(g);
-            for w in 0..N_WHEELS {
-                f[WHEEL0 + w] -= c.car.rails * loads[ci * N_WHEELS + w];
-            }
-            let av = accelerations(&c.m, &c.k, &z, &f)?;
-            c.nm.set_state(j, &z, &[0.0; N_DOF], &av, &c.k, &c.m);
-            for i in 0..N_DOF {
-                c.z0[i * W + j] = z[i];
-            }
+            c.set_static(j, rail, &loads[ci * N_WHEELS..(ci + 1) * N_WHEELS], g)?;
         }
         Ok(())
     }
@@ -984,22 +1120,13 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 }
             }
             for (j, lane) in self.lanes.iter_mut().enumerate() {
-                if lane.error.is_some() {
-                    continue;
-                }
-                for wi in 0..nw {
-                    match (self.p[j * nw + wi] == 0.0, lane.loss_open[wi]) {
-                        (true, None) => lane.loss_open[wi] = Some(t1),
-                        (false, Some(t0)) => {
-                            res[j].contact_loss.push(ContactLoss {
-                                wheel: wi,
-                                t_start: t0,
-                                t_end: Some(t1),
-                            });
-                            lane.loss_open[wi] = None;
-                        }
-                        _ => {}
-                    }
+                if lane.error.is_none() {
+                    note_contact(
+                        &mut lane.loss_open,
+                        &self.p[j * nw..(j + 1) * nw],
+                        t1,
+                        &mut res[j].contact_loss,
+                    );
                 }
             }
             self.record_step(&mut res, step + 1);
@@ -1009,29 +1136,9 @@ impl<'m, const W: usize> Simulation<'m, W> {
             .lanes
             .into_iter()
             .zip(res)
-            .map(|(lane, mut r)| {
-                if let Some(e) = lane.error {
-                    return Err(e);
-                }
-                for (wi, open) in lane.loss_open.iter().enumerate() {
-                    if let Some(t0) = open {
-                        r.contact_loss.push(ContactLoss {
-                            wheel: wi,
-                            t_start: *t0,
-                            t_end: None,
-                        });
-                    }
-                }
-                // A finite state can still give an overflowing index (an acceleration of
-                // 1e308 squared in an r.m.s.): never return it as a result.
-                if let Some((name, v)) = r.metrics().into_iter().find(|(_, v)| !v.is_finite()) {
-                    return Err(VtbError::Solver(format!(
-                        "the index {name} = {v} is not finite at the end of the run (step {}): \
-                         an overflow, most likely from parameters of extreme magnitude",
-                        r.n_steps
-                    )));
-                }
-                Ok(r)
+            .map(|(lane, r)| match lane.error {
+                Some(e) => Err(e),
+                None => finish(&lane.loss_open, r),
             })
             .collect())
     }
@@ -1100,7 +1207,12 @@ impl<'m, const W: usize> Simulation<'m, W> {
 }
 
 /// a = M⁻¹(F − K·u) for a subsystem at rest.
-fn accelerations(m: &CsrMatrix, k: &CsrMatrix, u: &[f64], f: &[f64]) -> Result<Vec<f64>> {
+pub(crate) fn accelerations(
+    m: &CsrMatrix,
+    k: &CsrMatrix,
+    u: &[f64],
+    f: &[f64],
+) -> Result<Vec<f64>> {
     let mut ku = vec![0.0; u.len()];
     k.mul(u, &mut ku);
     let r: Vec<f64> = f.iter().zip(&ku).map(|(a, b)| a - b).collect();

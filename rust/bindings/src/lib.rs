@@ -335,19 +335,77 @@ fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>
     Ok(d)
 }
 
+/// A structure's complex-modal reduction held by the core (built by `vtb.synthesis`): the
+/// arrays are converted once and shared by every run that is given it.
+#[pyclass(frozen, module = "vtb._core")]
+struct Reduction(Arc<vtb::synthesis::Reduction>);
+
+#[pymethods]
+impl Reduction {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        n_dofs: usize,
+        lambda_re: PyReadonlyArray1<'_, f64>,
+        lambda_im: PyReadonlyArray1<'_, f64>,
+        weight: PyReadonlyArray1<'_, f64>,
+        psi_re: PyReadonlyArray1<'_, f64>,
+        psi_im: PyReadonlyArray1<'_, f64>,
+        rail_dofs: usize,
+        band: usize,
+        residual: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let v = |a: PyReadonlyArray1<'_, f64>| a.as_array().to_vec();
+        vtb::synthesis::Reduction::new(
+            n_dofs,
+            v(lambda_re),
+            v(lambda_im),
+            v(weight),
+            v(psi_re),
+            v(psi_im),
+            rail_dofs,
+            band,
+            v(residual),
+        )
+        .map(|r| Self(Arc::new(r)))
+        .map_err(|e| to_py_err(py, e))
+    }
+
+    #[getter]
+    fn n_modes(&self) -> usize {
+        self.0.n_modes()
+    }
+
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.0.bytes()
+    }
+
+    /// The reduction's static flexibility sᵀK⁻¹s at rail shapes (start, values) pairs.
+    fn static_flexibility(&self, start: usize, values: Vec<f64>) -> f64 {
+        let s = vtb::basis::Shape { start, values };
+        self.0.static_flexibility(&s, &s)
+    }
+}
+
 /// Runs one configuration; returns a dict of histories and metrics.
 #[pyfunction]
-#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, reduction=None))]
 fn simulate<'py>(
     py: Python<'py>,
     config_json: &str,
     profile_x0: f64,
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
+    reduction: Option<&Reduction>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile)?;
-    let out = run_detached(py, None, |cancel, _| vtb::simulate(&cfg, &p, Some(cancel)))?;
+    let red = reduction.map(|r| Arc::clone(&r.0));
+    let out = run_detached(py, None, |cancel, _| {
+        vtb::simulate_with(&cfg, &p, red.as_deref(), Some(cancel))
+    })?;
     let r = out.map_err(|e| to_py_err(py, e))?;
     result_to_dict(py, r)
 }
@@ -358,7 +416,8 @@ fn simulate<'py>(
 /// (x0, dx, values) triples shared by index through `profile_index`; `progress(done)` is
 /// called from the calling thread as runs finish.
 #[pyfunction]
-#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES))]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES, reduction=None))]
+#[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
     configs: Vec<String>,
@@ -368,7 +427,9 @@ fn batch<'py>(
     progress: Option<Bound<'py, PyAny>>,
     histories: bool,
     max_lanes: usize,
+    reduction: Option<&Reduction>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let red = reduction.map(|r| Arc::clone(&r.0));
     if configs.len() != profile_index.len() {
         return Err(to_py_err(
             py,
@@ -415,7 +476,7 @@ fn batch<'py>(
             Record::Metrics
         };
         let opts = BatchOptions { record, max_lanes };
-        pool.install(|| vtb::run_batch(&jobs, opts, Some(cancel), Some(done)))
+        pool.install(|| vtb::run_batch_with(&jobs, opts, red.as_deref(), Some(cancel), Some(done)))
     })?;
     let out = PyList::empty(py);
     let mut it = results.into_iter();
@@ -546,6 +607,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(low_pass, m)?)?;
     m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;
     m.add_function(wrap_pyfunction!(patch_half_length, m)?)?;
+    m.add_class::<Reduction>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())
