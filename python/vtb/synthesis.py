@@ -46,8 +46,6 @@ FORMAT = 1
 CACHE_ENV = "VTB_CACHE_DIR"
 #: The undamped modes of the Ritz basis reach this multiple of the cut-off.
 BASIS_RATIO = 1.5
-#: Default cut-off (Hz) of the kept complex modes (docs/synthesis.md, convergence table).
-DEFAULT_CUTOFF = 4000.0
 #: Reach of the stored rail residual (m) on either side of a DOF: the residual flexibility
 #: between rail points farther apart is dropped (its size at this distance is reported by
 #: :func:`residual_decay` and in docs/synthesis.md).
@@ -296,3 +294,38 @@ def reduction(config: Config, progress: bool = False) -> Reduction:
     red.to_core()
     _MEMORY[key] = red
     return red
+
+
+def receptance(config: Config, x: float, frequencies, response_x=None) -> np.ndarray:
+    """The rail's point (or transfer) receptance (m/N) of the synthesis model of ``config``:
+    Σ_j w-paired ψ_j(x_r)ψ_j(x)/(iω − λ_j) + the static residual, the same quantity
+    :func:`vtb.receptance` computes from the full finite-element matrices (which it verifies,
+    docs/synthesis.md). Shape (n_freq,) or (n_freq, n_points) as there."""
+    from .track import _assemble, _frequencies, _positions, _shape_matrix
+
+    red = reduction(config)
+    system = _assemble(_structure_config(config))
+    xf, _ = _positions(x, system.length, "x")
+    freqs = _frequencies(frequencies)
+    xr, scalar = (xf, True) if response_x is None else _positions(response_x, system.length, "response_x")
+    sf = _shape_matrix(system, 0, xf).toarray()[:, 0]
+    sr = _shape_matrix(system, 0, xr).toarray()
+    pf, pr = sf @ red.psi, sr.T @ red.psi  # (m,), (n_points, m)
+    resid = np.array([_band_form(red, sr[:, i], sf) for i in range(sr.shape[1])])
+    iw = 2j * math.pi * freqs[:, None, None]
+    pair = (red.weight == 2.0)[None, None, :]
+    term = pr[None, :, :] * pf[None, None, :]
+    out = np.sum(term / (iw - red.lam) + np.where(pair, np.conj(term) / (iw - np.conj(red.lam)), 0.0), axis=2) + resid[None, :]
+    return out[:, 0] if scalar else out
+
+
+def _band_form(red: Reduction, a: np.ndarray, b: np.ndarray) -> float:
+    """aᵀRb for two rail vectors, R the stored residual band."""
+    total = 0.0
+    n = red.rail_dofs
+    for d in range(red.band + 1):
+        r = red.residual[: n - d, d]
+        total += float(np.dot(a[: n - d] * r, b[d:n]))
+        if d:
+            total += float(np.dot(a[d:n] * r, b[: n - d]))
+    return total

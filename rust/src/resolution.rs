@@ -8,7 +8,9 @@
 //!   elements the wave whose Bloch (periodic-mesh) frequency on an element of the longest length
 //!   the mesh allows is 1 % off;
 //! - **time step**: Newmark's average-acceleration rule shifts a frequency f to
-//!   2·atan(πfΔt)/(πfΔt)·f, 1 % low at 2πfΔt = 0.3496.
+//!   2·atan(πfΔt)/(πfΔt)·f, 1 % low at 2πfΔt = 0.3496. The complex-modal synthesis steps its
+//!   modes exactly; its Δt limit is the piecewise-linear force's sinc²(πfΔt) loss of
+//!   `INTERPOLATION_LOSS`, and its basis limit `SYNTHESIS_BAND_SHARE` of the cut-off.
 //!
 //! Supports raise a layer's frequencies at a given wavelength, so the free beam's frequency is
 //! the conservative end. These bounds are computed from the configuration alone (the mesh's
@@ -72,6 +74,29 @@ fn bloch_omega2(m: &[f64; 16], k: &[f64; 16], theta: f64) -> f64 {
     let disc = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
     // Lower root, written without cancellation.
     2.0 * qc / (-qb + disc)
+}
+
+/// Share of the synthesis cut-off f_c up to which its modes plus the static residual hold
+/// the response (the modes reach twice the band; docs/synthesis.md, receptance check).
+pub const SYNTHESIS_BAND_SHARE: f64 = 0.5;
+/// Loss of the synthesis's piecewise-linear force at the band edge: sinc²(πfΔt) = 1 − this.
+/// The exact modal step has no period error; what Δt limits is the force's interpolation
+/// (3 %: the index tolerance the synthesis is verified to, docs/synthesis.md).
+pub const INTERPOLATION_LOSS: f64 = 0.03;
+
+/// The frequency where sinc²(πfΔt) = 1 − INTERPOLATION_LOSS (bisection).
+fn interpolation_limit(dt: f64) -> f64 {
+    let loss = |x: f64| 1.0 - (x.sin() / x).powi(2);
+    let (mut lo, mut hi) = (1e-6, 1.5);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if loss(mid) < INTERPOLATION_LOSS {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi) / (PI * dt)
 }
 
 /// Newmark's 1 % frequency limit 2πfΔt = x with 1 − 2·atan(x/2)/x = TOLERANCE (bisection).
@@ -142,7 +167,11 @@ pub fn pinned_pinned_frequency(cfg: &Config) -> Option<f64> {
 pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
     let length = cfg.structure.length;
     let method = cfg.discretisation.method;
-    let time_f_max = newmark_limit(cfg.solver.dt);
+    let synthesis = cfg.discretisation.synthesis_cutoff;
+    let time_f_max = match synthesis {
+        Some(_) => interpolation_limit(cfg.solver.dt),
+        None => newmark_limit(cfg.solver.dt),
+    };
     cfg.structure
         .layers
         .iter()
@@ -158,7 +187,10 @@ pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
                 }
                 Method::Modal | Method::Hybrid => PI * lc.modes.max(1) as f64 / length,
             };
-            let basis_f_max = continuous_omega2(&layer, k_max).sqrt() / (2.0 * PI);
+            let mut basis_f_max = continuous_omega2(&layer, k_max).sqrt() / (2.0 * PI);
+            if let Some(fc) = synthesis {
+                basis_f_max = basis_f_max.min(SYNTHESIS_BAND_SHARE * fc);
+            }
             LayerBand {
                 layer: lc.name.clone(),
                 f_max: basis_f_max.min(time_f_max),
@@ -173,7 +205,19 @@ pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::presets::{paper, paper_converged};
+    use crate::presets::{paper, paper_converged, paper_fast};
+
+    #[test]
+    fn the_fast_preset_resolves_its_band_limit() {
+        // sinc²(πfΔt) = 0.97 at πfΔt = 0.3017; with Δt = 4e-5 s: 2401 Hz. The modes to 4 kHz
+        // hold 2 kHz, the band limit.
+        let cfg = paper_fast();
+        let x = PI * interpolation_limit(4e-5) * 4e-5;
+        assert!((1.0 - (x.sin() / x).powi(2) - 0.03).abs() < 1e-12, "{x}");
+        let rail = &resolved_bands(&cfg)[0];
+        assert_eq!(rail.f_max, 2000.0);
+        assert!(rail.f_max >= cfg.output.band_limit.unwrap());
+    }
 
     #[test]
     fn newmark_limit_is_where_the_period_error_is_one_percent() {

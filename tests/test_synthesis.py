@@ -1,0 +1,142 @@
+"""The complex-modal synthesis (vtb.synthesis, docs/synthesis.md) against the finite-element
+model it reduces: static compliance, receptances, a coupled run with dampers, batches, the
+disk cache and bad input. A one-span version of the converged preset keeps CI short; the
+160 m verification is docs/synthesis.md (benches/synthesis_verification.py)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+
+import vtb
+from vtb import synthesis, track
+
+
+def one_span(cutoff=4000.0):
+    """The converged preset on one 32 m span (rail 20 elements per bay, Timoshenko), the car's
+    rear wheelset 1 m on, 0.05 s at 80 m/s, observed over a fastener and mid-bay."""
+    c = vtb.paper_config(model="fast", calibrated=True)
+    c.structure.length = 32.0
+    for cp in c.structure.couplings:
+        if cp.positions:
+            cp.positions = [x for x in cp.positions if x <= 32.0 + 1e-9]
+    c.solver.t_end = 0.05
+    c.output.points = [12.8, 13.12]
+    c.discretisation.synthesis_cutoff = cutoff
+    return c
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cache(tmp_path_factory):
+    mp = pytest.MonkeyPatch()
+    mp.setenv(synthesis.CACHE_ENV, str(tmp_path_factory.mktemp("cache")))
+    synthesis._MEMORY.clear()
+    yield
+    mp.undo()
+    synthesis._MEMORY.clear()
+
+
+def fem_of(c):
+    f = c.copy()
+    f.discretisation.synthesis_cutoff = None
+    f.solver.dt = 2.5e-5
+    return f
+
+
+def test_static_compliance_of_the_reduction_is_the_full_models_at_10000_positions():
+    c = one_span()
+    red = synthesis.reduction(c)
+    system = track._assemble(synthesis._structure_config(c))
+    lu = spla.splu(system.k.tocsc())
+    xs = np.random.default_rng(3).uniform(0.0, 32.0, 10_000)
+    starts, values = vtb._core.shapes(system.json, 0, np.ascontiguousarray(xs))
+    worst = 0.0
+    for lo in range(0, xs.size, 2000):
+        s = track._shape_matrix(system, 0, xs[lo:lo + 2000]).toarray()
+        full = np.einsum("ij,ij->j", s, lu.solve(s))
+        mine = np.array([red.core.static_flexibility(int(st), list(map(float, v))) for st, v in zip(starts[lo:lo + 2000], values[lo:lo + 2000])])
+        worst = max(worst, float(np.max(np.abs(mine / full - 1.0))))
+    assert worst < 1e-9, worst
+
+
+def third_octave_energy(f, a, centre):
+    m = (f >= centre * 2 ** (-1 / 6)) & (f < centre * 2 ** (1 / 6))
+    return np.sum(np.abs(a[m]) ** 2)
+
+
+@pytest.mark.parametrize("x", [12.8, 13.12])  # over a fastener, mid-bay
+def test_receptance_bands_match_the_finite_elements(x):
+    c = one_span()
+    f = np.geomspace(40.0, 2240.0, 700)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.ResolutionWarning)
+        ref = vtb.receptance(fem_of(c), x, f)
+    mine = synthesis.receptance(c, x, f)
+    worst = max(abs(math.sqrt(third_octave_energy(f, mine, fc) / third_octave_energy(f, ref, fc)) - 1.0)
+                for fc in 1000 * 2 ** (np.arange(-13, 4) / 3))
+    assert worst < BAND_TOLERANCE, worst
+
+
+#: Measured worst third-octave band of |α| between 50 Hz and 2 kHz (docs/synthesis.md).
+BAND_TOLERANCE = 0.02
+
+
+def test_a_coupled_run_with_dampers_matches_the_finite_elements_within_3_percent():
+    c = one_span()
+    c.tids = vtb.tids_around(c, inertance=3.0, stiffness=1.46e8, damping=1e3, count=4, x=12.8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.ResolutionWarning)
+        ref = vtb.simulate(fem_of(c)).metrics()
+    mine = vtb.simulate(c).metrics()
+    for k in ("rail_disp_max", "slab_disp_max", "contact_force_max"):
+        assert mine[k] == pytest.approx(ref[k], rel=0.01), k
+    for k in ("rail_acc_max", "rail_acc_rms", "slab_acc_max", "slab_acc_rms"):
+        assert mine[k] == pytest.approx(ref[k], rel=0.03), k
+
+
+def test_a_batch_gives_each_jobs_own_bits():
+    c = one_span()
+    c.tids = vtb.tids_around(c, count=2, x=12.8)
+    d = c.copy()
+    d.tids.stiffness = 9e7
+    alone = [vtb.simulate(x).metrics() for x in (c, d)]
+    assert vtb.simulate_batch([c, d]) == alone
+
+
+def test_the_disk_cache_is_reused_and_refuses_corrupt_or_stale_files():
+    c = one_span(cutoff=3000.0)
+    red = synthesis.reduction(c)
+    path = synthesis._path(red.key)
+    assert path.exists()
+    synthesis._MEMORY.clear()
+    again, why = synthesis._load(path, red.key)
+    assert why == "cached" and np.array_equal(again.psi, red.psi)
+    path.write_bytes(b"not a reduction")
+    synthesis._MEMORY.clear()
+    with pytest.warns(UserWarning, match="corrupt"):
+        rebuilt = synthesis.reduction(c)
+    assert np.allclose(rebuilt.lam, red.lam, rtol=1e-9, atol=0)  # a rebuild: same modes to rounding
+    np.savez(path, key=np.array("another structure"), format=np.array(synthesis.FORMAT))
+    synthesis._MEMORY.clear()
+    with pytest.warns(UserWarning, match="stale"):
+        synthesis.reduction(c)
+
+
+def test_bad_input_names_the_field():
+    c = one_span()
+    text = c.to_core_json()
+    with pytest.raises(vtb.ConfigError, match="discretisation.synthesis_cutoff"):
+        vtb._core.simulate(text)  # no reduction
+    m = vtb.paper_config()
+    m.discretisation.synthesis_cutoff = 4000.0
+    with pytest.raises(vtb.ConfigError, match="discretisation.method"):
+        vtb.simulate(m)  # a modal structure
+    for bad in (0.0, -1.0, float("nan")):
+        b = one_span()
+        b.discretisation.synthesis_cutoff = bad
+        with pytest.raises(vtb.ConfigError, match="discretisation.synthesis_cutoff"):
+            vtb.simulate(b)
+    with pytest.raises(vtb.ConfigError, match="reduction.lambda"):
+        vtb._core.Reduction(1, np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
