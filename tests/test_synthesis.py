@@ -140,3 +140,22 @@ def test_bad_input_names_the_field():
             vtb.simulate(b)
     with pytest.raises(vtb.ConfigError, match="reduction.lambda"):
         vtb._core.Reduction(1, np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
+
+
+def test_the_moving_load_mode_runs_on_the_synthesis():
+    """A constant force crossing the span (no vehicle): displacement and band-limited
+    acceleration at mid-bay as the finite elements give them."""
+    c = one_span()
+    c.vehicles = []
+    c.forces = [vtb.MovingForce(magnitude=70e3, x0=2.0)]
+    c.solver.t_end = 0.2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.ResolutionWarning)
+        ref = vtb.simulate(fem_of(c)).metrics()
+    mine = vtb.simulate(c).metrics()
+    assert mine["rail_disp_max"] == pytest.approx(ref["rail_disp_max"], rel=0.01)
+    assert mine["slab_disp_max"] == pytest.approx(ref["slab_disp_max"], rel=0.01)
+    assert mine["slab_acc_rms"] == pytest.approx(ref["slab_acc_rms"], rel=0.03)
+    # A point force (no Hertz patch) over a fastener: the rail's band-limited acceleration is
+    # measured 5–6 % high (docs/synthesis.md, open); the bound keeps it from growing.
+    assert mine["rail_acc_rms"] == pytest.approx(ref["rail_acc_rms"], rel=0.06)

@@ -662,15 +662,26 @@ pub fn run(
                        shapes: &[Shape],
                        p: &[f64],
                        movers_now: &[Shape],
-                       cars: &[CarRun<1>]| {
+                       cars: &[CarRun<1>],
+                       ur: &mut [[f64; 2]]| {
         for (j, o) in observers.iter().enumerate() {
             let mut u = o.psi.re_dot(q);
-            if let Some(s) = &o.shape {
-                u += residual_at(s, shapes, p, movers_now);
-            }
-            res.disp[step * no + j] = u;
             res.acc[step * no + j] =
                 o.psi_l2.re_dot(q) + o.psi_lw.re_dot(g) + o.psi_w.re_dot(g_rate);
+            if let Some(s) = &o.shape {
+                // The residual's displacement moves with the loads; its acceleration is the
+                // central second difference, added to the previous step once this one is known
+                // (before t = 0 the loads stood still).
+                let r = residual_at(s, shapes, p, movers_now);
+                u += r;
+                let [before, last] = if step == 0 { [r, r] } else { ur[j] };
+                if step > 0 {
+                    let before = if step == 1 { last } else { before };
+                    res.acc[(step - 1) * no + j] += (r - 2.0 * last + before) / (dt * dt);
+                }
+                ur[j] = [last, r];
+            }
+            res.disp[step * no + j] = u;
         }
         let (ncars, ndof) = (res.n_cars, res.vehicle_dofs);
         for (ci, c) in cars.iter().take(ncars).enumerate() {
@@ -683,6 +694,7 @@ pub fn run(
         res.contact_force[step * nw..(step + 1) * nw].copy_from_slice(p);
     };
     let mut g_rate = MVec::zeros(m);
+    let mut ur = vec![[0.0; 2]; no];
     record_step(
         &mut res,
         0,
@@ -693,6 +705,7 @@ pub fn run(
         &p,
         &mover_shapes,
         &cars,
+        &mut ur,
     );
 
     // ------------------------------------------------------------- the steps
@@ -854,6 +867,7 @@ pub fn run(
             &p,
             &mover_shapes,
             &cars,
+            &mut ur,
         );
     }
     finish(&loss_open, res)
