@@ -159,3 +159,15 @@ def test_the_moving_load_mode_runs_on_the_synthesis():
     # A point force (no Hertz patch) over a fastener: the rail's band-limited acceleration is
     # measured 5–6 % high (docs/synthesis.md, open); the bound keeps it from growing.
     assert mine["rail_acc_rms"] == pytest.approx(ref["rail_acc_rms"], rel=0.06)
+
+
+def test_a_tid_sweep_runs_on_the_synthesis_with_each_cases_own_result():
+    c = one_span()
+    c.tids = vtb.tids_around(c, count=2, x=12.8)
+    sw = vtb.sweep(c, b_t=[3.0], k_t=[1e8, 2e8], c_t=[1e3], progress=False)
+    col = sw.columns
+    for i in (1, 2):
+        j = int(np.flatnonzero(col["case"] == i)[0])
+        one = c.copy()
+        one.tids.inertance, one.tids.stiffness, one.tids.damping = col["b_t"][j], col["k_t"][j], col["c_t"][j]
+        assert col["rail_acc_max"][j] == vtb.simulate(one).metrics()["rail_acc_max"]

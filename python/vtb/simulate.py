@@ -249,7 +249,7 @@ class Result:
         t, x = self.series(layer, quantity, point, window)
         bands = third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
         if len(bands["upper"]):
-            warn_beyond(self.config, layer, float(bands["upper"][-1]), "the band levels", stepped=True)
+            warn_beyond(self.config, layer, float(bands["upper"][-1]), "the top band", stepped=True)
         return bands
 
     def comfort(self, car: int = 0, window: Optional[tuple] = None) -> dict:
