@@ -41,7 +41,7 @@ CHECKS = [("rail_disp_max", 0.01), ("slab_disp_max", 0.01), ("bridge_disp_max", 
 def pair(calibrated=True, irregularity=True, design=None):
     fast = vtb.paper_config(model="fast", calibrated=calibrated)
     if not irregularity:
-        fast.irregularity = None
+        fast.irregularity = vtb.Irregularity(kind="none")
     if design:
         b, k, c = DESIGNS[design]
         fast.tids = vtb.tids_around(fast, inertance=b, stiffness=k, damping=c)
