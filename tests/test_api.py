@@ -182,3 +182,17 @@ def test_two_cars_on_the_fem_model_run_past_the_column_cache():
     res = vtb.simulate(cfg)
     assert res.contact_force.shape[1] == 8
     assert np.all(np.isfinite(res.contact_force)) and np.all(res.contact_force > 0)
+
+
+@pytest.mark.parametrize("target, name, path", [
+    (lambda c: c, "sped", "sped"),
+    (lambda c: c.solver, "time_step", "solver.time_step"),
+    (lambda c: c.structure.layers[0], "densty", "structure.layers[0].densty"),
+    (lambda c: c.structure.couplings[1], "stifness", "structure.couplings[1].stifness"),
+    (lambda c: c.vehicles[0], "mass", "vehicles[0].mass"),
+    (lambda c: c.copy().discretisation, "metod", "discretisation.metod"),
+])
+def test_an_attribute_typo_names_its_full_dotted_path(target, name, path):
+    with pytest.raises(vtb.ConfigError) as e:
+        setattr(target(vtb.paper_config()), name, 1)
+    assert e.value.field == path

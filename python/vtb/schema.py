@@ -58,7 +58,9 @@ def documented(struct: str, **python_only: str):
 class StrictFields:
     """Base of the configuration dataclasses: assigning an attribute the class does not
     declare (``cfg.sped = 100``) raises :class:`~vtb.errors.ConfigError` with the known
-    names instead of silently adding it."""
+    names instead of silently adding it, naming the full dotted path from the configuration
+    (``solver.time_step``, ``structure.layers[0].densty``). Each nested configuration knows
+    where it was assigned (its parent and field) for that message."""
 
     __slots__ = ()
 
@@ -68,5 +70,19 @@ class StrictFields:
             from .errors import config_error
 
             known = ", ".join(sorted(fields))
-            raise config_error(name, value, f"{type(self).__name__} has no such field (known: {known})")
+            raise config_error(self._field_path(name), value, f"{type(self).__name__} has no such field (known: {known})")
         object.__setattr__(self, name, value)
+        if isinstance(value, StrictFields):
+            object.__setattr__(value, "_vtb_owner", (self, name))
+        elif isinstance(value, list):
+            for i, item in enumerate(value):
+                if isinstance(item, StrictFields):
+                    object.__setattr__(item, "_vtb_owner", (self, f"{name}[{i}]"))
+
+    def _field_path(self, name: str) -> str:
+        """``name`` prefixed by where this object sits in its configuration."""
+        owner = getattr(self, "_vtb_owner", None)
+        if owner is None:
+            return name
+        parent, key = owner
+        return parent._field_path(f"{key}.{name}")
