@@ -102,3 +102,18 @@ def test_tids_around_places_one_per_bay_centred_on_the_observation_point():
     assert t.spacing == pytest.approx(0.64)
     assert np.mean(xs) == pytest.approx(80.0)
     assert np.allclose((xs - 0.32) / 0.64, np.round((xs - 0.32) / 0.64))
+
+
+def test_tids_around_refuses_positions_off_the_rail_instead_of_moving_them():
+    c = vtb.paper_config()
+    with pytest.raises(vtb.ConfigError, match="must lie on the fastened rail") as e:
+        vtb.tids_around(c, x=200.0)
+    assert e.value.field == "x"
+    with pytest.raises(vtb.ConfigError, match="would reach beyond the fastened rail") as e:
+        vtb.tids_around(c, x=159.0)
+    assert e.value.field == "x"
+    with pytest.raises(vtb.ConfigError) as e:
+        vtb.tids_around(c, count=0)
+    assert e.value.field == "count"
+    t = vtb.tids_around(c, x=156.5)  # the last ten bays fit exactly
+    assert t.x0 - 0.32 >= 0 and t.x0 + (t.count - 1) * t.spacing + 0.32 <= 160.0 + 1e-9

@@ -8,6 +8,7 @@ irregularity. Every choice the article leaves open is documented in ``docs/model
 from __future__ import annotations
 
 import json
+import math
 from typing import Optional, Sequence
 
 from . import _core
@@ -92,17 +93,29 @@ def tids_around(config: Config, inertance: float = 5.0, stiffness: float = 2e8, 
     1 kHz decays within a few metres along the fastened rail, so dampers beyond ±3 m of the
     observation point change the rail amplitude there by under 1 % (10 → 50 dampers) while
     each damper adds to every time step."""
+    from .errors import config_error
+
     rail = config.structure.layers[0].name
     fast = next((c for c in config.structure.couplings if c.upper == rail and c.kind == "discrete"), None)
     if fast is None or len(fast.positions) < 2:
-        raise ValueError("tids_around needs discrete fasteners under the top layer")
+        raise config_error("structure.couplings", "[…]", "tids_around needs discrete fasteners under the top layer")
     pos = sorted(fast.positions)
+    bays = len(pos) - 1
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= bays:
+        raise config_error("count", count, f"must be a whole number of bays, 1 … {bays}")
     if x is None:
         x = config.output.points[0] if config.output.points else config.structure.length / 2
+    if not (isinstance(x, (int, float)) and math.isfinite(x) and pos[0] <= x <= pos[-1]):
+        raise config_error("x", x, f"must lie on the fastened rail, {pos[0]:g} ≤ x ≤ {pos[-1]:g} m")
     spacing = pos[1] - pos[0]
-    # Bays [pos[j], pos[j+1]]: the one containing x, then count bays centred on it.
-    j = min(range(len(pos) - 1), key=lambda i: abs(0.5 * (pos[i] + pos[i + 1]) - x))
-    first = max(0, min(len(pos) - 1 - count, j - count // 2 + (1 if x >= 0.5 * (pos[j] + pos[j + 1]) else 0)))
+    # Bays [pos[j], pos[j+1]]: the one containing x, then count bays centred on it; dampers
+    # that would not fit are refused, never moved.
+    j = min(range(bays), key=lambda i: abs(0.5 * (pos[i] + pos[i + 1]) - x))
+    first = j - count // 2 + (1 if x >= 0.5 * (pos[j] + pos[j + 1]) else 0)
+    if first < 0 or first + count > bays:
+        lo, hi = pos[count // 2], pos[bays - count + count // 2]
+        raise config_error("x", x, f"{count} dampers centred here would reach beyond the fastened rail "
+                           f"[{pos[0]:g}, {pos[-1]:g}] m: centre them within about [{lo:g}, {hi:g}] m or use fewer")
     return TIDs(inertance=inertance, stiffness=stiffness, damping=damping, count=count, x0=0.5 * (pos[first] + pos[first + 1]), spacing=spacing, upper=rail, lower=config.structure.layers[1].name)
 
 
