@@ -54,7 +54,7 @@ def test_decay_rate_and_band_levels_warn_beyond_the_band():
     from fuzz_cases import small_config
 
     r = vtb.simulate(small_config(t_end=0.05, tids=False))
-    with pytest.warns(vtb.ResolutionWarning, match="band levels"):
+    with pytest.warns(vtb.ResolutionWarning, match="top band"):
         r.third_octave("rail")
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import vtb
+from fuzz_cases import accept_implausible
 from vtb import Config, Coupling, Layer, MovingForce, RayleighRatio, Structure
 
 
@@ -26,7 +27,7 @@ def _sdof_with_tid(mu: float):
     cfg.discretisation.method = "fem"
     cfg.discretisation.fem_elements = 2
     cfg.tids = vtb.TIDs(inertance=b, stiffness=b * w_d**2, damping=2 * b * w_d * zeta, count=1, x0=0.5, spacing=1.0)
-    return cfg, w_s, k_s
+    return accept_implausible(cfg), w_s, k_s
 
 
 @pytest.mark.parametrize("mu,published", [(0.01, 14.18), (0.05, 6.41), (0.10, 4.59), (0.20, 3.33)])
@@ -71,7 +72,7 @@ def uncontrolled():
 def test_vanishing_tid_recovers_the_uncontrolled_run(uncontrolled, changes):
     cfg = vtb.paper_config()
     cfg.tids = vtb.tids_around(cfg, **changes)
-    m = vtb.simulate(cfg).metrics()
+    m = vtb.simulate(accept_implausible(cfg)).metrics()
     for key in ("rail_acc_max", "rail_disp_max", "slab_acc_max", "car_acc_max"):
         assert m[key] == pytest.approx(uncontrolled[key], rel=1e-5), key
 

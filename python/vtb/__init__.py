@@ -39,6 +39,7 @@ from .track import Modes, decay_rate, modes, receptance
 from .optimize import OptimizationResult, optimize
 from .robust import DesignEvaluation, evaluate_design, evaluate_designs
 from .tables import metrics_table, read_parquet
+from .config import plausible_ranges
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
@@ -47,5 +48,5 @@ __all__ = [
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
-    "metrics_table", "read_parquet",
+    "metrics_table", "read_parquet", "plausible_ranges",
 ]

@@ -224,6 +224,7 @@ class Config(StrictFields):
     output: Output = field(default_factory=Output)
     irregularity: Irregularity = field(default_factory=Irregularity)
     tids: Optional[TIDs] = _default("Config", "tids")
+    accept_implausible: list = _default("Config", "accept_implausible")
 
     def __repr__(self) -> str:
         """One line: method, layers (modes), length, loads, speed, step, irregularity, dampers.
@@ -511,3 +512,13 @@ def _check_value(v, hint, path: str) -> None:
 def core_dict(cfg: Config) -> dict[str, Any]:
     """The dict the core receives (for inspection)."""
     return json.loads(cfg.to_core_json())
+
+
+def plausible_ranges() -> list:
+    """The plausible range of every physical field the core checks, as rows ``{"field", "min",
+    "max", "unit", "covers"}`` (SI units; ``[*]`` stands for every index of a list). A value
+    outside its range raises :class:`vtb.ConfigError` naming the field, the value and the likely
+    unit mistake, unless ``Config.accept_implausible`` lists the field's path."""
+    from . import _core
+
+    return [dict(field=f, min=lo, max=hi, unit=u, covers=c) for f, lo, hi, u, c in _core.plausible_ranges()]

@@ -160,6 +160,10 @@ def moving_load_config(
     deflection). ``"rest"`` starts undeformed with the forces applied suddenly: a step on the
     stiff supports, whose mode (ω·Δt ≫ 1) the undamped Newmark scheme never lets go of, so
     the accelerations carry that start for the whole run (docs/model-choices.md).
+
+    Values beyond a railway's plausible ranges (an academic speed ratio v/v_cr above
+    150 m/s, a beam given as EI with I = 1) are refused as likely unit mistakes unless listed
+    in ``accept_implausible`` of the returned configuration (docs/limits.md).
     """
     if supports == "simply_supported":
         # Point supports 10⁶ times stiffer than the beam's midspan stiffness 48EI/L³: the end

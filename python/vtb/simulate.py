@@ -39,12 +39,14 @@ def _real(v) -> Optional[float]:
 
 
 def _prepare(cfg: Config) -> tuple[str, tuple]:
-    """The core JSON of a configuration and its irregularity profile (x0, dx, values). Only
-    the irregularity, which lives on this side, is checked here; the core validates the rest
-    once, when it runs the configuration."""
+    """The core JSON of a configuration and its irregularity profile (x0, dx, values). The
+    plausible ranges and the irregularity, which lives on this side, are checked here; the
+    core validates the rest once, when it runs the configuration."""
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
     text = cfg.to_core_json()
+    # A unit mistake (a speed in km/h) is named before the irregularity's checks it would trip.
+    _core.check_plausible(text)
     if not isinstance(cfg.irregularity, Irregularity):
         raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")

@@ -115,7 +115,7 @@ def _structure_json(config: Config) -> str:
     d["vehicles"] = []
     d["forces"] = [{"magnitude": 0.0, "x0": 0.0, "layer": None}]
     d["speed"] = 0.0
-    d["solver"] = _to_plain(Solver(dt=1.0, t_end=1.0, initial_state="rest"))
+    d["solver"] = _to_plain(Solver(dt=1e-3, t_end=1e-3, initial_state="rest"))
     d["output"] = {"points": []}
     return json.dumps(d, allow_nan=False)
 

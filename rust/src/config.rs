@@ -35,6 +35,11 @@ pub struct Config {
     /// Tuned inerter dampers between two layers (optional; none by default).
     #[serde(default)]
     pub tids: Option<TidConfig>,
+    /// Field paths (e.g. `"speed"`, `"structure.couplings[3].stiffness"`) whose values may lie
+    /// outside their plausible range (docs/limits.md, `vtb.plausible_ranges()`); any other
+    /// such value is refused as a likely unit mistake.
+    #[serde(default)]
+    pub accept_implausible: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
@@ -662,6 +667,7 @@ impl Config {
 
     /// Checks every field; the first problem found is returned with its dotted path.
     pub fn validate(&self, profile: &Profile) -> Result<()> {
+        crate::plausibility::check(self)?;
         let s = &self.structure;
         let length = positive("structure.length", s.length)?;
         if s.layers.is_empty() {

@@ -24,6 +24,7 @@ pub mod indices;
 pub mod integrator;
 pub mod layers;
 pub mod model;
+pub mod plausibility;
 pub mod presets;
 pub mod resolution;
 pub mod results;

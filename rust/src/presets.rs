@@ -157,6 +157,7 @@ pub fn paper() -> Config {
             ..OutputConfig::default()
         },
         tids: None,
+        accept_implausible: Vec::new(),
     }
 }
 

@@ -593,6 +593,19 @@ fn patch_half_length(
     ))
 }
 
+/// Refuses a configuration with an implausible value (a likely unit mistake), naming it.
+#[pyfunction]
+fn check_plausible(py: Python<'_>, config_json: &str) -> PyResult<()> {
+    let cfg = parse_config(py, config_json)?;
+    vtb::plausibility::check(&cfg).map_err(|e| to_py_err(py, e))
+}
+
+/// The plausible ranges of the physical fields: (field, min, max, unit, covers) rows.
+#[pyfunction]
+fn plausible_ranges() -> Vec<(&'static str, f64, f64, &'static str, &'static str)> {
+    vtb::plausibility::table()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
@@ -608,6 +621,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;
     m.add_function(wrap_pyfunction!(patch_half_length, m)?)?;
     m.add_class::<Reduction>()?;
+    m.add_function(wrap_pyfunction!(plausible_ranges, m)?)?;
+    m.add_function(wrap_pyfunction!(check_plausible, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     Ok(())
