@@ -5,7 +5,7 @@ contacts and the dampers are not, and they touch the structure at a few points. 
 reduction of this module is therefore computed once per structure and reused:
 
 * the complex (state-space) modes of the damped structure, (λ²M + λC + K)ψ = 0, with
-  |λ| < 2π·f_c (one of each conjugate pair), by Rayleigh–Ritz: the undamped modes up to
+  modulus below 2π·f_c (one of each conjugate pair), by Rayleigh–Ritz: the undamped modes up to
   :data:`BASIS_RATIO`·f_c (Sturm-checked spectrum slicing) and the static attachment vectors
   K⁻¹·(s_upper − s_lower) of every discrete dashpot (the fasteners), less their modal part,
   span the subspace; M, C and K are projected in full and the projected quadratic problem is

@@ -183,7 +183,7 @@ pub struct DiscretisationConfig {
     #[serde(default = "default_true")]
     pub element_flexibility: bool,
     /// Cut-off (Hz) of the complex-modal synthesis of a finite-element structure: `None` steps
-    /// the finite elements (Newmark); f_c keeps the complex modes with |λ| < 2π·f_c plus the
+    /// the finite elements (Newmark); f_c keeps the complex modes of modulus below 2π·f_c plus the
     /// rail's static residual, and steps each mode exactly (docs/synthesis.md). Needs
     /// `method = "fem"` and the structure's reduction (`vtb.synthesis.reduction`).
     #[serde(default)]
