@@ -46,6 +46,7 @@ def test_reproduce_quick(tmp_path):
         assert (out / name).exists(), name
     text = (out / "report.md").read_text()
     assert "article, solution 1" in text and "1005.6" in text
+    assert str(tmp_path) not in text and "`vtb reproduce --out rep --quick`" in text  # relative to its folder
     # the frequency view and one evidence paragraph per gap
     assert "## Frequency view" in text and "![one-third-octave levels](fig_third_octave.png)" in text
     gaps = text.split("## The gaps between vtb and the article, and the evidence")[1].split("## Run times")[0]

@@ -64,3 +64,16 @@ def test_receptance_example_finds_the_pinned_pinned_peaks(tmp_path):
 def test_comfort_example_warns_about_its_record():
     text = _run("comfort_check.py")
     assert "a_w =" in text and "Wz =" in text and "warning: comfort:" in text
+
+
+def test_no_page_or_generated_report_carries_an_absolute_path():
+    """Pages and generated reports name folders relative to themselves: an absolute path (the
+    machine they were written on) is meaningless to a reader."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    pattern = re.compile(r"(?<![\w.])/(?:work|tmp|root|home|Users|var|opt)/")
+    found = [f"{p.relative_to(root)}:{i + 1}" for p in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+             for i, line in enumerate(p.read_text().splitlines()) if pattern.search(line)]
+    assert not found, found

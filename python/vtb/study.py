@@ -384,7 +384,8 @@ def _smooth_text(levels: list) -> list:
 
 
 def _report(out, quick, plan, times, this_total, article, factor, levels, chains, rs, ropt, designs, held, verdicts, speeds) -> None:
-    cmd = f"vtb study robust --out {out}" + (" --quick" if quick else "")
+    # The report names its folder, never an absolute path (it is read where it is copied).
+    cmd = f"vtb study robust --out {Path(out).name}" + (" --quick" if quick else "")
     n_cases = len(ropt.baseline)
     L = [
         "# Robust damper design and the article's conclusions re-examined" + (" (quick study)" if quick else ""),
