@@ -171,3 +171,17 @@ def test_a_tid_sweep_runs_on_the_synthesis_with_each_cases_own_result():
         one = c.copy()
         one.tids.inertance, one.tids.stiffness, one.tids.damping = col["b_t"][j], col["k_t"][j], col["c_t"][j]
         assert col["rail_acc_max"][j] == vtb.simulate(one).metrics()["rail_acc_max"]
+
+
+def test_the_cache_key_is_the_structures_alone():
+    """Dampers, vehicles, speed, excitation, solver and plausibility opt-outs share one
+    reduction; a structural change does not."""
+    c = one_span()
+    d = c.copy()
+    d.tids = vtb.tids_around(d, count=2, x=12.8)
+    d.speed, d.solver.dt, d.accept_implausible = 60.0, 3e-5, ["speed"]
+    d.irregularity = vtb.Irregularity(kind="none")
+    assert synthesis.cache_key(c) == synthesis.cache_key(d)
+    e = c.copy()
+    e.structure.couplings[0].stiffness *= 1.01
+    assert synthesis.cache_key(e) != synthesis.cache_key(c)

@@ -129,7 +129,9 @@ def cache_key(config: Config) -> str:
     cutoff = config.discretisation.synthesis_cutoff
     if cutoff is None:
         raise config_error("discretisation.synthesis_cutoff", None, "the configuration does not ask for the synthesis")
-    text = json.dumps({"format": FORMAT, "structure": json.loads(_structure_json(_structure_config(config))),
+    structure = json.loads(_structure_json(_structure_config(config)))
+    structure.pop("accept_implausible", None)  # an opt-out changes no matrix
+    text = json.dumps({"format": FORMAT, "structure": structure,
                        "cutoff": float(cutoff), "basis_ratio": BASIS_RATIO, "reach": RESIDUAL_REACH}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
 
