@@ -84,34 +84,28 @@ pub const SYNTHESIS_BAND_SHARE: f64 = 0.5;
 /// (3 %: the index tolerance the synthesis is verified to, docs/synthesis.md).
 pub const INTERPOLATION_LOSS: f64 = 0.03;
 
-/// The frequency where sinc²(πfΔt) = 1 − INTERPOLATION_LOSS (bisection).
-fn interpolation_limit(dt: f64) -> f64 {
-    let loss = |x: f64| 1.0 - (x.sin() / x).powi(2);
-    let (mut lo, mut hi) = (1e-6, 1.5);
+/// The x in (1e-6, hi) where an error rising with x reaches `tol` (bisection).
+fn crossing(err: impl Fn(f64) -> f64, tol: f64, hi: f64) -> f64 {
+    let (mut lo, mut hi) = (1e-6, hi);
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if loss(mid) < INTERPOLATION_LOSS {
+        if err(mid) < tol {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    0.5 * (lo + hi) / (PI * dt)
+    0.5 * (lo + hi)
 }
 
-/// Newmark's 1 % frequency limit 2πfΔt = x with 1 − 2·atan(x/2)/x = TOLERANCE (bisection).
+/// The frequency where sinc²(πfΔt) = 1 − INTERPOLATION_LOSS.
+fn interpolation_limit(dt: f64) -> f64 {
+    crossing(|x| 1.0 - (x.sin() / x).powi(2), INTERPOLATION_LOSS, 1.5) / (PI * dt)
+}
+
+/// Newmark's 1 % frequency limit 2πfΔt = x with 1 − 2·atan(x/2)/x = TOLERANCE.
 fn newmark_limit(dt: f64) -> f64 {
-    let err = |x: f64| 1.0 - 2.0 * (0.5 * x).atan() / x;
-    let (mut lo, mut hi) = (1e-6, 3.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if err(mid) < TOLERANCE {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi) / (2.0 * PI * dt)
+    crossing(|x| 1.0 - 2.0 * (0.5 * x).atan() / x, TOLERANCE, 3.0) / (2.0 * PI * dt)
 }
 
 /// Largest wavenumber (rad/m) that a finite-element layer with elements of length `h` holds to

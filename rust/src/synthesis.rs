@@ -931,44 +931,25 @@ mod tests {
 
     #[test]
     fn a_bad_reduction_names_its_field() {
-        let e = Reduction::new(
-            2,
-            vec![1.0],
-            vec![3.0],
-            vec![2.0],
-            vec![0.0; 2],
-            vec![0.0; 2],
-            2,
-            0,
-            vec![0.0; 2],
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("reduction.lambda[0]"), "{e}");
-        let e = Reduction::new(
-            2,
-            vec![-1.0],
-            vec![3.0],
-            vec![1.0],
-            vec![0.0; 2],
-            vec![0.0; 2],
-            2,
-            0,
-            vec![0.0; 2],
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("reduction.weight[0]"), "{e}");
-        let e = Reduction::new(
-            2,
-            vec![-1.0],
-            vec![3.0],
-            vec![2.0],
-            vec![0.0; 3],
-            vec![0.0; 2],
-            2,
-            0,
-            vec![0.0; 2],
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("reduction.psi_re"), "{e}");
+        // One mode on two DOFs: (Re λ, weight, psi_re length) and the field refused.
+        for (lam_re, weight, n_psi, field) in [
+            (1.0, 2.0, 2, "reduction.lambda[0]"),
+            (-1.0, 1.0, 2, "reduction.weight[0]"),
+            (-1.0, 2.0, 3, "reduction.psi_re"),
+        ] {
+            let e = Reduction::new(
+                2,
+                vec![lam_re],
+                vec![3.0],
+                vec![weight],
+                vec![0.0; n_psi],
+                vec![0.0; 2],
+                2,
+                0,
+                vec![0.0; 2],
+            )
+            .unwrap_err();
+            assert!(e.to_string().contains(field), "{e}");
+        }
     }
 }
