@@ -608,7 +608,11 @@ impl FemBasis {
     /// element splits into two whose end stiffnesses (closed form, exact for Timoshenko
     /// beams) condense onto x. Euler–Bernoulli: a³b³/(3EIℓ³).
     pub fn local_flexibility(&self, ei: f64, x: f64) -> f64 {
-        let e = self.element_of(x);
+        self.local_flexibility_in(self.element_of(x), ei, x)
+    }
+
+    /// `local_flexibility` at x in element e.
+    fn local_flexibility_in(&self, e: usize, ei: f64, x: f64) -> f64 {
         let (a, b) = (x - self.nodes[e], self.nodes[e + 1] - x);
         let l = a + b;
         if a <= 1e-12 * l || b <= 1e-12 * l {
@@ -695,7 +699,7 @@ impl FemBasis {
     /// length, about 1 % of the Hertz compliance for a 60 kg rail.
     pub fn patch_flexibility(&self, ei: f64, x: f64, a: f64) -> f64 {
         let mut f = 0.0;
-        self.patch_average(x, a, |_, xs, w| f += w * self.local_flexibility(ei, xs));
+        self.patch_average(x, a, |e, xs, w| f += w * self.local_flexibility_in(e, ei, xs));
         f
     }
 

@@ -9,8 +9,9 @@
 //!   the mesh allows is 1 % off;
 //! - **time step**: Newmark's average-acceleration rule shifts a frequency f to
 //!   2·atan(πfΔt)/(πfΔt)·f, 1 % low at 2πfΔt = 0.3496. The complex-modal synthesis steps its
-//!   modes exactly; its Δt limit is the piecewise-linear force's sinc²(πfΔt) loss of
-//!   `INTERPOLATION_LOSS`, and its basis limit `SYNTHESIS_BAND_SHARE` of the cut-off.
+//!   modes exactly; its Δt limit is where its piecewise-linear force's sinc²(πfΔt) loss, once
+//!   equalised by the records' FIR (docs/synthesis.md), is 1 % off, at 2πfΔt = 0.974; its
+//!   basis limit is `SYNTHESIS_BAND_SHARE` of the cut-off.
 //!
 //! Supports raise a layer's frequencies at a given wavelength, so the free beam's frequency is
 //! the conservative end. These bounds are computed from the configuration alone (the mesh's
@@ -79,10 +80,6 @@ fn bloch_omega2(m: &[f64; 16], k: &[f64; 16], theta: f64) -> f64 {
 /// Share of the synthesis cut-off f_c up to which its modes plus the static residual hold
 /// the response (the modes reach twice the band; docs/synthesis.md, receptance check).
 pub const SYNTHESIS_BAND_SHARE: f64 = 0.5;
-/// Loss of the synthesis's piecewise-linear force at the band edge: sinc²(πfΔt) = 1 − this.
-/// The exact modal step has no period error; what Δt limits is the force's interpolation
-/// (3 %: the index tolerance the synthesis is verified to, docs/synthesis.md).
-pub const INTERPOLATION_LOSS: f64 = 0.03;
 
 /// The x in (1e-6, hi) where an error rising with x reaches `tol` (bisection).
 fn crossing(err: impl Fn(f64) -> f64, tol: f64, hi: f64) -> f64 {
@@ -98,9 +95,16 @@ fn crossing(err: impl Fn(f64) -> f64, tol: f64, hi: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The frequency where sinc²(πfΔt) = 1 − INTERPOLATION_LOSS.
+/// The error of the synthesis's force interpolation at 2πfΔt = x once equalised: the
+/// piecewise-linear force's gain sinc²(x/2) times the records' FIR 1 + (1 − cos x)/6.
+fn interpolation_error(x: f64) -> f64 {
+    let h = 0.5 * x;
+    (1.0 - (h.sin() / h).powi(2) * (1.0 + (1.0 - x.cos()) / 6.0)).abs()
+}
+
+/// The synthesis's 1 % frequency limit of the time step (`interpolation_error`).
 fn interpolation_limit(dt: f64) -> f64 {
-    crossing(|x| 1.0 - (x.sin() / x).powi(2), INTERPOLATION_LOSS, 1.5) / (PI * dt)
+    crossing(interpolation_error, TOLERANCE, 2.0) / (2.0 * PI * dt)
 }
 
 /// Newmark's 1 % frequency limit 2πfΔt = x with 1 − 2·atan(x/2)/x = TOLERANCE.
@@ -203,11 +207,17 @@ mod tests {
 
     #[test]
     fn the_fast_preset_resolves_its_band_limit() {
-        // sinc²(πfΔt) = 0.97 at πfΔt = 0.3017; with Δt = 4e-5 s: 2401 Hz. The modes to 4 kHz
-        // hold 2 kHz, the band limit.
+        // sinc²(x/2)·(1 + (1 − cos x)/6) = 1 − x⁴/90 + O(x⁶): 1 % off at x = 2πfΔt ≈ 1.0
+        // (0.996 exactly), 3.17 kHz at Δt = 5e-5 s. The modes to 4 kHz hold 2 kHz, the band
+        // limit.
         let cfg = paper_fast();
-        let x = PI * interpolation_limit(4e-5) * 4e-5;
-        assert!((1.0 - (x.sin() / x).powi(2) - 0.03).abs() < 1e-12, "{x}");
+        let x = 2.0 * PI * interpolation_limit(5e-5) * 5e-5;
+        assert!((interpolation_error(x) - 0.01).abs() < 1e-12, "{x}");
+        assert!((x - 0.9958).abs() < 1e-3, "{x}");
+        for y in [0.05, 0.1, 0.2] {
+            let rel = interpolation_error(y) / (y.powi(4) / 90.0);
+            assert!((rel - 1.0).abs() < 0.01, "the x⁴/90 series at {y}: {rel}");
+        }
         let rail = &resolved_bands(&cfg)[0];
         assert_eq!(rail.f_max, 2000.0);
         assert!(rail.f_max >= cfg.output.band_limit.unwrap());

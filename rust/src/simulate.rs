@@ -161,8 +161,8 @@ pub fn run_batch(
     run_batch_with(jobs, opts, None, cancel, done)
 }
 
-/// `run_batch` with the structure's reduction for jobs that ask for the synthesis (each job
-/// then runs alone on its group's shared model; the reduction is shared by all).
+/// `run_batch` with the structure's reduction for jobs that ask for the synthesis (shared by
+/// all; its lockstep groups share the wheels' modal shapes as well).
 pub fn run_batch_with(
     jobs: &[Job],
     opts: BatchOptions,
@@ -202,10 +202,7 @@ pub fn run_batch_with(
             };
             let mut chunks = Vec::new();
             let mut at = 0;
-            let widths = match reduction {
-                Some(_) => vec![1; members.len()],
-                None => lane_widths(members.len(), threads, opts.max_lanes),
-            };
+            let widths = lane_widths(members.len(), threads, opts.max_lanes);
             for w in widths {
                 chunks.push(&members[at..at + w]);
                 at += w;
@@ -216,16 +213,7 @@ pub fn run_batch_with(
                     let res = match &model {
                         Err(e) => vec![Err(e.clone()); chunk.len()],
                         Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                        Ok(m) => match reduction {
-                            Some(red) => chunk
-                                .iter()
-                                .map(|&i| {
-                                    let spec = LaneSpec::of(&jobs[i].config, &jobs[i].profile);
-                                    synthesis::run(m, &spec, red, record, cancel)
-                                })
-                                .collect(),
-                            None => run_lanes(m, jobs, chunk, record, cancel),
-                        },
+                        Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
                     };
                     if let Some(d) = done {
                         d.fetch_add(chunk.len(), Ordering::Relaxed);
@@ -244,12 +232,14 @@ pub fn run_batch_with(
         .collect()
 }
 
-/// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model.
+/// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model (on its
+/// reduction when the jobs ask for the synthesis).
 fn run_lanes(
     model: &Model,
     jobs: &[Job],
     chunk: &[usize],
     record: Record,
+    reduction: Option<&Reduction>,
     cancel: Option<&AtomicBool>,
 ) -> Vec<Result<RunResult>> {
     let lanes: Vec<LaneSpec> = chunk
@@ -260,18 +250,20 @@ fn run_lanes(
         model: &Model,
         lanes: &[LaneSpec],
         record: Record,
+        reduction: Option<&Reduction>,
         cancel: Option<&AtomicBool>,
     ) -> Vec<Result<RunResult>> {
-        match Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)) {
-            Ok(r) => r,
-            Err(e) => vec![Err(e); W],
-        }
+        let out = match reduction {
+            Some(red) => synthesis::run_lanes::<W>(model, lanes, red, record, cancel),
+            None => Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)),
+        };
+        out.unwrap_or_else(|e| vec![Err(e); W])
     }
     match lanes.len() {
-        1 => go::<1>(model, &lanes, record, cancel),
-        2 => go::<2>(model, &lanes, record, cancel),
-        4 => go::<4>(model, &lanes, record, cancel),
-        8 => go::<8>(model, &lanes, record, cancel),
+        1 => go::<1>(model, &lanes, record, reduction, cancel),
+        2 => go::<2>(model, &lanes, record, reduction, cancel),
+        4 => go::<4>(model, &lanes, record, reduction, cancel),
+        8 => go::<8>(model, &lanes, record, reduction, cancel),
         w => unreachable!("lane width {w}"),
     }
 }

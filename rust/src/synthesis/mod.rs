@@ -1,0 +1,229 @@
+//! Complex-modal synthesis of a finite-element structure (docs/synthesis.md).
+//!
+//! The structure is linear and shared by every job of a study; the wheels and the dampers
+//! are not, and they touch it at a few points. A [`Reduction`] holds the structure's complex
+//! modes, (λ²M + λC + K)ψ = 0 normalised to ψᵀ(2λM + C)ψ = 1 (one of each conjugate pair,
+//! weight w = 2; real modes w = 1), and the static residual flexibility of the rail, R =
+//! K⁻¹ − G_m (G_m = −Σ w·Re(ψψᵀ/λ)), as a band over the rail's DOFs. The displacement is
+//!
+//!   u = Re Σ_j ψ_j·Q_j + R·f,   Q̇_j = λ_j·Q_j + w_j·ψ_jᵀf,
+//!
+//! and each Q_j is stepped exactly under a force linear over the step (`step`): no period
+//! error at any Δt. [`run_lanes`] couples the modes with the wheels (Hertz contact), the
+//! dampers (physical elements on fixed ports) and the moving forces, W jobs in lockstep.
+//!
+//! - `reduction` (this file): the modes, the residual and their checks;
+//! - `step`: complex arithmetic, the exact step's coefficients;
+//! - `kernels`: the two passes over the modes per step (vectorised, lane-generic);
+//! - `run`: the coupled step.
+
+mod kernels;
+mod run;
+mod step;
+
+pub use run::{run, run_lanes};
+
+use crate::basis::Shape;
+use kernels::CVec;
+use crate::error::{Result, VtbError};
+
+/// Mode arrays are padded with inert modes (ψ = 0, λ = 0, w = 0) to a multiple of this, the
+/// partial sums of every dot product over the modes.
+pub(crate) const PAD: usize = crate::simd::PARTIAL_SUMS;
+
+/// The reduction of one structure (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Reduction {
+    n_dofs: usize,
+    /// Modes, and the padded mode count (the row stride of ψ).
+    m: usize,
+    stride: usize,
+    lam_re: Vec<f64>,
+    lam_im: Vec<f64>,
+    weight: Vec<f64>,
+    /// ψ_j at DOF i at `[i·stride + j]`, zero for j ≥ m.
+    psi_re: Vec<f64>,
+    psi_im: Vec<f64>,
+    rail_dofs: usize,
+    band: usize,
+    /// R between rail DOFs i and i + d at `[i·(band + 1) + d]`, 0 ≤ d ≤ band.
+    residual: Vec<f64>,
+}
+
+fn refuse(field: &str, value: impl std::fmt::Display, why: &str) -> VtbError {
+    VtbError::config(format!("reduction.{field}"), value, why.to_string())
+}
+
+impl Reduction {
+    /// Checks every array's length and value: finite, Re λ < 0 (a stable structure), weights
+    /// 1 (real λ) or 2 (a pair). `psi_*` are n_dofs × m, row-major.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        n_dofs: usize,
+        lam_re: Vec<f64>,
+        lam_im: Vec<f64>,
+        weight: Vec<f64>,
+        psi_re: Vec<f64>,
+        psi_im: Vec<f64>,
+        rail_dofs: usize,
+        band: usize,
+        residual: Vec<f64>,
+    ) -> Result<Self> {
+        let m = lam_re.len();
+        if m == 0 {
+            return Err(refuse("modes", 0, "holds no mode"));
+        }
+        for (name, len, want) in [
+            ("lambda_im", lam_im.len(), m),
+            ("weight", weight.len(), m),
+            ("psi_re", psi_re.len(), n_dofs * m),
+            ("psi_im", psi_im.len(), n_dofs * m),
+            ("residual", residual.len(), rail_dofs * (band + 1)),
+        ] {
+            if len != want {
+                return Err(refuse(name, len, &format!("needs {want} entries")));
+            }
+        }
+        if rail_dofs > n_dofs {
+            return Err(refuse("rail_dofs", rail_dofs, "exceeds the DOF count"));
+        }
+        for j in 0..m {
+            if !(lam_re[j] < 0.0 && lam_im[j].is_finite() && lam_im[j] >= 0.0) {
+                return Err(refuse(
+                    &format!("lambda[{j}]"),
+                    format!("{} + {}i", lam_re[j], lam_im[j]),
+                    "must have Re λ < 0 and Im λ ≥ 0, finite",
+                ));
+            }
+            let want = if lam_im[j] == 0.0 { 1.0 } else { 2.0 };
+            if weight[j] != want {
+                return Err(refuse(
+                    &format!("weight[{j}]"),
+                    weight[j],
+                    "must be 1 for a real λ, 2 for a pair",
+                ));
+            }
+        }
+        for (name, v) in [
+            ("psi_re", &psi_re),
+            ("psi_im", &psi_im),
+            ("residual", &residual),
+        ] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(refuse(&format!("{name}[{i}]"), v[i], "must be finite"));
+            }
+        }
+        let stride = m.next_multiple_of(PAD);
+        let pad_rows = |a: Vec<f64>| -> Vec<f64> {
+            let mut out = vec![0.0; n_dofs * stride];
+            for (dst, src) in out.chunks_exact_mut(stride).zip(a.chunks_exact(m)) {
+                dst[..m].copy_from_slice(src);
+            }
+            out
+        };
+        let pad = |mut a: Vec<f64>| {
+            a.resize(stride, 0.0);
+            a
+        };
+        Ok(Self {
+            n_dofs,
+            m,
+            stride,
+            lam_re: pad(lam_re),
+            lam_im: pad(lam_im),
+            weight: pad(weight),
+            psi_re: pad_rows(psi_re),
+            psi_im: pad_rows(psi_im),
+            rail_dofs,
+            band,
+            residual,
+        })
+    }
+
+    pub fn n_modes(&self) -> usize {
+        self.m
+    }
+
+    pub fn n_dofs(&self) -> usize {
+        self.n_dofs
+    }
+
+    /// Memory held (bytes).
+    pub fn bytes(&self) -> usize {
+        8 * (self.lam_re.len() * 3 + self.psi_re.len() * 2 + self.residual.len())
+    }
+
+    /// ψ at DOF i (re, im), padded.
+    fn row(&self, i: usize) -> (&[f64], &[f64]) {
+        let r = i * self.stride..(i + 1) * self.stride;
+        (&self.psi_re[r.clone()], &self.psi_im[r])
+    }
+
+    /// aᵀ·R·b for two shapes on the rail's DOFs (zero beyond the stored band).
+    pub fn residual(&self, a: &Shape, b: &Shape) -> f64 {
+        let bw = self.band + 1;
+        let mut sum = 0.0;
+        for (ka, &va) in a.values.iter().enumerate() {
+            let i = a.start + ka;
+            if i >= self.rail_dofs || va == 0.0 {
+                continue;
+            }
+            for (kb, &vb) in b.values.iter().enumerate() {
+                let k = b.start + kb;
+                if k >= self.rail_dofs {
+                    continue;
+                }
+                let (lo, hi) = if i <= k { (i, k) } else { (k, i) };
+                if hi - lo <= self.band {
+                    sum += va * vb * self.residual[lo * bw + hi - lo];
+                }
+            }
+        }
+        sum
+    }
+
+    /// Static flexibility aᵀK⁻¹b of the reduction: −Σ w·Re(ψᵀa·ψᵀb/λ) + aᵀRb.
+    pub fn static_flexibility(&self, a: &Shape, b: &Shape) -> f64 {
+        let (mut pa, mut pb) = (CVec::zeros(self.stride), CVec::zeros(self.stride));
+        kernels::project(self, a, &mut pa);
+        kernels::project(self, b, &mut pb);
+        let (ar, ai, br, bi) = (&pa.re, &pa.im, &pb.re, &pb.im);
+        let mut modal = 0.0;
+        for j in 0..self.m {
+            let (pr, pi) = (ar[j] * br[j] - ai[j] * bi[j], ar[j] * bi[j] + ai[j] * br[j]);
+            let d = self.lam_re[j] * self.lam_re[j] + self.lam_im[j] * self.lam_im[j];
+            // Re(p/λ) = (p_r λ_r + p_i λ_i)/|λ|².
+            modal -= self.weight[j] * (pr * self.lam_re[j] + pi * self.lam_im[j]) / d;
+        }
+        modal + self.residual(a, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bad_reduction_names_its_field() {
+        // One mode on two DOFs: (Re λ, weight, psi_re length) and the field refused.
+        for (lam_re, weight, n_psi, field) in [
+            (1.0, 2.0, 2, "reduction.lambda[0]"),
+            (-1.0, 1.0, 2, "reduction.weight[0]"),
+            (-1.0, 2.0, 3, "reduction.psi_re"),
+        ] {
+            let e = Reduction::new(
+                2,
+                vec![lam_re],
+                vec![3.0],
+                vec![weight],
+                vec![0.0; n_psi],
+                vec![0.0; 2],
+                2,
+                0,
+                vec![0.0; 2],
+            )
+            .unwrap_err();
+            assert!(e.to_string().contains(field), "{e}");
+        }
+    }
+}
