@@ -699,7 +699,9 @@ impl FemBasis {
     /// length, about 1 % of the Hertz compliance for a 60 kg rail.
     pub fn patch_flexibility(&self, ei: f64, x: f64, a: f64) -> f64 {
         let mut f = 0.0;
-        self.patch_average(x, a, |e, xs, w| f += w * self.local_flexibility_in(e, ei, xs));
+        self.patch_average(x, a, |e, xs, w| {
+            f += w * self.local_flexibility_in(e, ei, xs)
+        });
         f
     }
 

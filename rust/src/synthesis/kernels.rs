@@ -4,26 +4,27 @@
 //! shapes ψᵀs from a few rows of ψ, their step compliance and the free rail displacement
 //! under them) and the update pass (`update`: the forces in, the modes stepped, every
 //! observer and damper port read out, the next step's free state). Both go block by block
-//! over the modes so that a block's intermediate values stay in the L1 cache and every array
-//! is streamed once per pass: the run is bound by memory traffic, not arithmetic.
+//! over the modes: a block of the shared arrays (ψ, the coefficients, the ports) is read from
+//! memory once and used by every lane while it is in cache, and a block's intermediate values
+//! never leave the L1 cache. The run is bound by memory traffic, not arithmetic.
 //!
-//! Lane arrays hold W interleaved jobs (`[j·W + c]`); shared arrays (ψ, the coefficients) one
-//! value per mode. Every lane does the same floating-point operations in the same order
-//! whatever W (dot products in `P` partial sums by mode index mod P, blocks a multiple of P),
-//! so a job gives the same bits alone and in a group. Called inside `wide!`, the loops
-//! vectorise over the modes (W = 1) or over the lanes.
+//! Each lane's state is a vector of its own, and every lane runs the same single-vector code
+//! on its slice of a block (dot products in `P` partial sums by mode index mod P, blocks a
+//! multiple of P): a job gives the same bits alone and in a group. Called inside `wide!`, the
+//! loops vectorise over the modes.
 
 use super::Reduction;
 use super::step::Coefficients;
 use crate::basis::Shape;
 use crate::simd::PARTIAL_SUMS as P;
 
-/// Modes per block: a multiple of P; 256 modes of a few lane arrays fit the L1 cache.
+/// Modes per block: a multiple of P, small enough for a block of every shared array a lane
+/// reads to stay in cache for the next lane.
 const BLOCK: usize = 256;
-/// The width of the single-vector kernels.
+/// The lane count of the single-vector kernels (`wide!` is generic over lanes).
 const ONE: usize = 1;
 
-/// A complex vector (re, im), over the modes (shared) or over modes × lanes.
+/// A complex vector (re, im) over the (padded) modes.
 #[derive(Clone, Debug, Default)]
 pub(super) struct CVec {
     pub re: Vec<f64>,
@@ -38,7 +39,7 @@ impl CVec {
         }
     }
 
-    /// self = c ⊙ o for per-mode complex constants c (shared vectors).
+    /// self = c ⊙ o for per-mode complex constants c.
     pub fn set_mul(&mut self, c: [&[f64]; 2], o: &CVec) {
         for j in 0..self.re.len() {
             let (a, b) = (o.re[j], o.im[j]);
@@ -46,111 +47,60 @@ impl CVec {
             self.im[j] = c[0][j] * b + c[1][j] * a;
         }
     }
-}
 
-/// A complex vector of W lanes over the modes: `[j][c]` is mode j of lane c.
-#[derive(Clone, Debug)]
-pub(super) struct LVec<const W: usize> {
-    pub re: Vec<[f64; W]>,
-    pub im: Vec<[f64; W]>,
-}
-
-impl<const W: usize> LVec<W> {
-    pub fn zeros(n: usize) -> Self {
-        Self {
-            re: vec![[0.0; W]; n],
-            im: vec![[0.0; W]; n],
-        }
+    pub fn is_finite(&self) -> bool {
+        self.re.iter().chain(&self.im).all(|x| x.is_finite())
     }
 
-    /// Lane c as a shared vector.
-    pub fn lane(&self, c: usize) -> CVec {
-        CVec {
-            re: self.re.iter().map(|x| x[c]).collect(),
-            im: self.im.iter().map(|x| x[c]).collect(),
-        }
-    }
-
-    pub fn lane_finite(&self, c: usize) -> bool {
-        self.re.iter().chain(&self.im).all(|x| x[c].is_finite())
-    }
-
-    /// Sets lane c to v at mode j.
-    pub fn set(&mut self, j: usize, c: usize, v: (f64, f64)) {
-        (self.re[j][c], self.im[j][c]) = v;
-    }
-
-    pub fn clear_lane(&mut self, c: usize) {
-        for x in self.re.iter_mut().chain(self.im.iter_mut()) {
-            x[c] = 0.0;
-        }
+    pub fn clear(&mut self) {
+        self.re.fill(0.0);
+        self.im.fill(0.0);
     }
 }
 
-
-/// Partial sums of W lane dot products, by mode index mod P.
+/// Partial sums of one dot product per lane, by mode index mod P.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Acc<const W: usize>([[f64; W]; P]);
+pub(super) struct Acc<const W: usize>([[f64; P]; W]);
 
 impl<const W: usize> Acc<W> {
-    pub const ZERO: Self = Self([[0.0; W]; P]);
+    pub const ZERO: Self = Self([[0.0; P]; W]);
 
     /// The dot products: partial sums added pairwise.
     pub fn sum(&self) -> [f64; W] {
-        let a = &self.0;
-        std::array::from_fn(|c| {
-            ((a[0][c] + a[1][c]) + (a[2][c] + a[3][c]))
-                + ((a[4][c] + a[5][c]) + (a[6][c] + a[7][c]))
-        })
+        self.0
+            .map(|a| ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7])))
     }
 }
 
-/// acc += Re Σ a·x for a shared vector a and a lane vector x (n modes, a multiple of P).
+/// acc += Re Σ a·x over a block (a length that is a multiple of P).
 #[inline(always)]
-fn cdot<const W: usize>(acc: &mut Acc<W>, ar: &[f64], ai: &[f64], xr: &[[f64; W]], xi: &[[f64; W]]) {
+fn cdot(acc: &mut [f64; P], ar: &[f64], ai: &[f64], xr: &[f64], xi: &[f64]) {
     let a = ar.chunks_exact(P).zip(ai.chunks_exact(P));
     let x = xr.chunks_exact(P).zip(xi.chunks_exact(P));
-    let mut s = acc.0;
+    let mut s = *acc;
     for ((ar, ai), (xr, xi)) in a.zip(x) {
         for q in 0..P {
-            for c in 0..W {
-                s[q][c] = ar[q].mul_add(xr[q][c], (-ai[q]).mul_add(xi[q][c], s[q][c]));
-            }
+            s[q] = ar[q].mul_add(xr[q], (-ai[q]).mul_add(xi[q], s[q]));
         }
     }
-    acc.0 = s;
+    *acc = s;
 }
 
-/// y[j][c] += x[j]·s[c] (a shared real vector times lane scalars).
+/// y += Σ_k s_k·x_k for four vectors (one pass over y).
 #[inline(always)]
-fn lane_axpy<const W: usize>(y: &mut [[f64; W]], x: &[f64], s: &[f64; W]) {
-    for (yv, xv) in y.iter_mut().zip(x) {
-        for c in 0..W {
-            yv[c] = xv.mul_add(s[c], yv[c]);
-        }
-    }
-}
-
-/// y[j][c] += Σ_k x_k[j]·s_k[c] for four shared vectors (one pass over y).
-#[inline(always)]
-fn lane_axpy4<const W: usize>(y: &mut [[f64; W]], x: [&[f64]; 4], s: [&[f64; W]; 4]) {
-    let [x0, x1, x2, x3] = x;
+fn axpy4(y: &mut [f64], x: [&[f64]; 4], s: [f64; 4]) {
     let n = y.len();
-    let (x0, x1, x2, x3) = (&x0[..n], &x1[..n], &x2[..n], &x3[..n]);
-    for ((yv, (a, b)), (c, d)) in y.iter_mut().zip(x0.iter().zip(x1)).zip(x2.iter().zip(x3)) {
-        for l in 0..W {
-            yv[l] = a.mul_add(s[0][l], b.mul_add(s[1][l], c.mul_add(s[2][l], d.mul_add(s[3][l], yv[l]))));
-        }
+    let (x0, x1, x2, x3) = (&x[0][..n], &x[1][..n], &x[2][..n], &x[3][..n]);
+    for ((y, (a, b)), (c, d)) in y.iter_mut().zip(x0.iter().zip(x1)).zip(x2.iter().zip(x3)) {
+        *y = a.mul_add(s[0], b.mul_add(s[1], c.mul_add(s[2], d.mul_add(s[3], *y))));
     }
 }
 
-/// y[j][c] += x[j] (a shared real vector added to every lane).
+/// y += s·x.
 #[inline(always)]
-fn lane_add<const W: usize>(y: &mut [[f64; W]], x: &[f64]) {
-    for (yv, xv) in y.iter_mut().zip(x) {
-        for c in 0..W {
-            yv[c] += xv;
-        }
+fn axpy(y: &mut [f64], x: &[f64], s: f64) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y = x.mul_add(s, *y);
     }
 }
 
@@ -173,12 +123,8 @@ fn project_block(red: &Reduction, s: &Shape, b0: usize, b1: usize, or: &mut [f64
             }
             first = false;
         } else {
-            for (o, x) in or.iter_mut().zip(rr) {
-                *o = v.mul_add(*x, *o);
-            }
-            for (o, x) in oi.iter_mut().zip(ri) {
-                *o = v.mul_add(*x, *o);
-            }
+            axpy(or, rr, v);
+            axpy(oi, ri, v);
         }
     }
     if first {
@@ -187,13 +133,12 @@ fn project_block(red: &Reduction, s: &Shape, b0: usize, b1: usize, or: &mut [f64
     }
 }
 
-/// Re Σ a·x for two shared vectors (length a multiple of P).
+/// Re Σ a·x for two vectors (length a multiple of P).
 pub(super) fn dot(ar: &[f64], ai: &[f64], xr: &[f64], xi: &[f64]) -> f64 {
     crate::wide!(<ONE> (ar: &[f64] = ar, ai: &[f64] = ai, xr: &[f64] = xr, xi: &[f64] = xi) -> f64 {
-        let mut acc = Acc::<1>::ZERO;
-        let (xr, xi): (&[[f64; 1]], &[[f64; 1]]) = (xr.as_chunks().0, xi.as_chunks().0);
-        cdot::<1>(&mut acc, ar, ai, xr, xi);
-        acc.sum()[0]
+        let mut acc = [0.0; P];
+        cdot(&mut acc, ar, ai, xr, xi);
+        Acc::<1>([acc]).sum()[0]
     })
 }
 
@@ -205,10 +150,9 @@ pub(super) fn project(red: &Reduction, s: &Shape, out: &mut CVec) {
     })
 }
 
-/// The wheel pass: for each wheel of shape `shapes[w]`, `outs[w]` = ψᵀs, its step compliance
-/// Re Σ a1·(ψᵀs)² into `diag[w]` and, per lane, the free rail displacement under it
-/// Re Σ (ψᵀs)·Q̃ into `rail[w]`. All wheels go through one block at a time, so that the
-/// block of a1 and Q̃ is read once for all of them.
+/// What the wheel pass reads and writes: for each wheel of shape `shapes[w]`, `outs[w]` =
+/// ψᵀs, its step compliance Re Σ a1·(ψᵀs)² into `diag[w]` and, per lane, the free rail
+/// displacement under it Re Σ (ψᵀs)·Q̃ into `rail[w]`.
 pub(super) struct WheelPass<'a, const W: usize> {
     pub shapes: &'a [Shape],
     pub outs: &'a mut [CVec],
@@ -216,8 +160,14 @@ pub(super) struct WheelPass<'a, const W: usize> {
     pub rail: &'a mut [Acc<W>],
 }
 
-pub(super) fn wheel_pass<const W: usize>(red: &Reduction, coef: &Coefficients, q_free: &LVec<W>, p: WheelPass<'_, W>) {
-    crate::wide!(<W> (red: &Reduction = red, coef: &Coefficients = coef, qf: &LVec<W> = q_free, p: WheelPass<'_, W> = p) {
+/// The wheel pass (see `WheelPass`), all wheels and lanes one block at a time.
+pub(super) fn wheel_pass<const W: usize>(
+    red: &Reduction,
+    coef: &Coefficients,
+    q_free: &[CVec; W],
+    p: WheelPass<'_, W>,
+) {
+    crate::wide!(<W> (red: &Reduction = red, coef: &Coefficients = coef, qf: &[CVec; W] = q_free, p: WheelPass<'_, W> = p) {
         let WheelPass { shapes, outs, diag, rail } = p;
         let n = red.stride;
         diag.fill(Acc::ZERO);
@@ -226,13 +176,11 @@ pub(super) fn wheel_pass<const W: usize>(red: &Reduction, coef: &Coefficients, q
         while b0 < n {
             let b1 = (b0 + BLOCK).min(n);
             let (a1r, a1i) = (&coef.a1[0][b0..b1], &coef.a1[1][b0..b1]);
-            let (qr, qi) = (&qf.re[b0..b1], &qf.im[b0..b1]);
             for (((s, out), d), r) in shapes.iter().zip(outs.iter_mut()).zip(diag.iter_mut()).zip(rail.iter_mut()) {
                 let (or, oi) = (&mut out.re[b0..b1], &mut out.im[b0..b1]);
                 project_block(red, s, b0, b1, or, oi);
                 let chunks = or.chunks_exact(P).zip(oi.chunks_exact(P)).zip(a1r.chunks_exact(P).zip(a1i.chunks_exact(P)));
-                // Partial sums in registers over the block.
-                let mut acc = d.0.map(|x| x[0]);
+                let mut acc = d.0[0];
                 for ((or, oi), (a1r, a1i)) in chunks {
                     for q in 0..P {
                         let tr = a1r[q] * or[q] - a1i[q] * oi[q];
@@ -240,33 +188,48 @@ pub(super) fn wheel_pass<const W: usize>(red: &Reduction, coef: &Coefficients, q
                         acc[q] = tr.mul_add(or[q], (-ti).mul_add(oi[q], acc[q]));
                     }
                 }
-                d.0 = acc.map(|x| [x]);
-                cdot::<W>(r, or, oi, qr, qi);
+                d.0[0] = acc;
+                for (acc, q) in r.0.iter_mut().zip(qf) {
+                    cdot(acc, or, oi, &q.re[b0..b1], &q.im[b0..b1]);
+                }
             }
             b0 = b1;
         }
     })
 }
 
-/// Lane-block scratch of the update pass.
+/// One lane's block scratch of the update pass.
 #[derive(Clone, Debug)]
-pub(super) struct Scratch<const W: usize> {
-    dg: LVec<W>,
-    q: LVec<W>,
-    qa: LVec<W>,
-    wg: LVec<W>,
-    z: LVec<W>,
+pub(super) struct Scratch {
+    dg: CVec,
+    q: CVec,
 }
 
-impl<const W: usize> Scratch<W> {
+impl Scratch {
     pub fn new() -> Self {
         Self {
-            dg: LVec::zeros(BLOCK),
-            q: LVec::zeros(BLOCK),
-            qa: LVec::zeros(BLOCK),
-            wg: LVec::zeros(BLOCK),
-            z: LVec::zeros(BLOCK),
+            dg: CVec::zeros(BLOCK),
+            q: CVec::zeros(BLOCK),
         }
+    }
+}
+
+/// acc[k] += Re Σ a_k·x over a block for four vectors a_k (x read once).
+#[inline(always)]
+fn cdot4(acc: [&mut [f64; P]; 4], a: [(&[f64], &[f64]); 4], xr: &[f64], xi: &[f64]) {
+    let mut s = acc.each_ref().map(|a| **a);
+    let n = xr.len();
+    let a = a.map(|(r, i)| (&r[..n], &i[..n]));
+    for (c, (xr, xi)) in xr.chunks_exact(P).zip(xi.chunks_exact(P)).enumerate() {
+        for (k, (ar, ai)) in a.iter().enumerate() {
+            let (ar, ai) = (&ar[c * P..(c + 1) * P], &ai[c * P..(c + 1) * P]);
+            for q in 0..P {
+                s[k][q] = ar[q].mul_add(xr[q], (-ai[q]).mul_add(xi[q], s[k][q]));
+            }
+        }
+    }
+    for (a, s) in acc.into_iter().zip(s) {
+        *a = s;
     }
 }
 
@@ -279,10 +242,9 @@ pub(super) struct Update<'a, const W: usize> {
     pub forces: &'a [[f64; W]],
     /// The moving forces' modal force at t_{n+1} and t_{n+2} (shared), if any.
     pub movers: Option<(&'a CVec, &'a CVec)>,
-    /// The observers' ψᵀs; out, per observer: Re Σ ψᵀs·Q (displacement), Re Σ ψᵀs·λ(λQ + w·g)
-    /// (acceleration without the force-rate term), Re Σ ψᵀs·λw·g and Re Σ ψᵀs·w·g (whose rate
-    /// is that term): `run::records` makes the records of them.
-    pub observers: &'a [CVec],
+    /// The observers' ψᵀs and λ²ψᵀs; out, per observer: Re Σ ψᵀs·Q and Re Σ λ²ψᵀs·Q (the
+    /// displacement, and the acceleration but for the force's direct terms).
+    pub observers: &'a [[CVec; 2]],
     pub observed: &'a mut [Acc<W>],
     /// Ports from `dampers_from` on: out, their free displacement Re Σ ψᵀs·Q̃_{n+2}.
     pub dampers_from: usize,
@@ -292,130 +254,102 @@ pub(super) struct Update<'a, const W: usize> {
 /// The update pass of a step: with Δg = Σ_ports f·ψᵀs (the forces found this step),
 ///
 ///   g_{n+1} = g_known + Δg,  Q_{n+1} = Q̃_{n+1} + a1·Δg,
-///   Q̈ = λ(λQ + w·g) + w·ġ,
 ///   Q̃_{n+2} = e·Q_{n+1} + a0·g_{n+1} + a1·g_known,n+2,
 ///
-/// the observers read Re Σ ψᵀs·Q, Re Σ ψᵀs·λ(λQ + w·g), Re Σ ψᵀs·λw·g and Re Σ ψᵀs·w·g,
-/// the dampers Re Σ ψᵀs·Q̃_{n+2}. `q_free` (Q̃) and `g` advance in place.
+/// the observers read Re Σ ψᵀs·Q and Re Σ λ²ψᵀs·Q (of Q̈ = λ²Q + λw·g + w·ġ; the force's
+/// terms are the caller's, `run`), the dampers Re Σ ψᵀs·Q̃_{n+2}. `q_free` (Q̃) advances in place.
 pub(super) fn update<const W: usize>(
     u: Update<'_, W>,
-    q_free: &mut LVec<W>,
-    g: &mut LVec<W>,
-    scratch: &mut Scratch<W>,
+    q_free: &mut [CVec; W],
+    scratch: &mut Scratch,
 ) {
-    crate::wide!(<W> (u: Update<'_, W> = u, qf: &mut LVec<W> = q_free, g: &mut LVec<W> = g, sc: &mut Scratch<W> = scratch) {
+    crate::wide!(<W> (u: Update<'_, W> = u, qf: &mut [CVec; W] = q_free, sc: &mut Scratch = scratch) {
         let Update { coef, ports, forces, movers, observers, observed, dampers_from, damper_free } = u;
         let n = coef.w.len();
         for acc in observed.iter_mut().chain(damper_free.iter_mut()) {
             *acc = Acc::ZERO;
         }
-        let zero = [0.0; BLOCK];
         let mut b0 = 0;
         while b0 < n {
             let b1 = (b0 + BLOCK).min(n);
             let nb = b1 - b0;
-            let (dgr, dgi) = (&mut sc.dg.re[..nb], &mut sc.dg.im[..nb]);
-            dgr.fill([0.0; W]);
-            dgi.fill([0.0; W]);
-            // Four ports at a time: one pass over the block's Δg per four.
-            for (v, f) in ports.chunks(4).zip(forces.chunks(4)) {
-                if let ([v0, v1, v2, v3], [f0, f1, f2, f3]) = (v, f) {
-                    let f = [f0, f1, f2, f3];
-                    lane_axpy4::<W>(dgr, [&v0.re[b0..b1], &v1.re[b0..b1], &v2.re[b0..b1], &v3.re[b0..b1]], f);
-                    lane_axpy4::<W>(dgi, [&v0.im[b0..b1], &v1.im[b0..b1], &v2.im[b0..b1], &v3.im[b0..b1]], f);
-                } else {
-                    for (v, f) in v.iter().zip(f) {
-                        lane_axpy::<W>(dgr, &v.re[b0..b1], f);
-                        lane_axpy::<W>(dgi, &v.im[b0..b1], f);
-                    }
-                }
-            }
             let (er, ei) = (&coef.e[0][b0..b1], &coef.e[1][b0..b1]);
             let (a0r, a0i) = (&coef.a0[0][b0..b1], &coef.a0[1][b0..b1]);
             let (a1r, a1i) = (&coef.a1[0][b0..b1], &coef.a1[1][b0..b1]);
-            let (lr, li, w) = (&coef.lam[0][b0..b1], &coef.lam[1][b0..b1], &coef.w[b0..b1]);
-            let (qfr, qfi) = (&mut qf.re[b0..b1], &mut qf.im[b0..b1]);
-            let (gr, gi) = (&mut g.re[b0..b1], &mut g.im[b0..b1]);
-            let (qr, qi) = (&mut sc.q.re[..nb], &mut sc.q.im[..nb]);
-            let (qar, qai) = (&mut sc.qa.re[..nb], &mut sc.qa.im[..nb]);
-            let (k0r, k0i, k1r, k1i) = match movers {
-                Some((k0, k1)) => (&k0.re[b0..b1], &k0.im[b0..b1], &k1.re[b0..b1], &k1.im[b0..b1]),
-                None => (&zero[..nb], &zero[..nb], &zero[..nb], &zero[..nb]),
-            };
-            // A few arrays per loop, so that each vectorises over the modes (W = 1) or the
-            // lanes; the block's intermediate values stay in L1.
-            // Q = Q̃ + a1·Δg, with Δg = g_{n+1} − g_known.
-            for ((((yr, yi), (fr, fi)), (dr, di)), (a1r, a1i)) in qr.iter_mut().zip(qi.iter_mut())
-                .zip(qfr.iter().zip(qfi.iter())).zip(dgr.iter().zip(dgi.iter()))
-                .zip(a1r.iter().zip(a1i))
-            {
-                for c in 0..W {
-                    yr[c] = a1r.mul_add(dr[c], (-a1i).mul_add(di[c], fr[c]));
-                    yi[c] = a1r.mul_add(di[c], a1i.mul_add(dr[c], fi[c]));
-                }
-            }
-            if movers.is_some() {
-                lane_add::<W>(dgr, k0r);
-                lane_add::<W>(dgi, k0i);
-            }
-            let (gnr, gni): (&[[f64; W]], &[[f64; W]]) = (dgr, dgi);
-            // w·g, and Q̈ without the force-rate term: λ(λQ + w·g); λw·g; g advances.
-            let (wgr, wgi) = (&mut sc.wg.re[..nb], &mut sc.wg.im[..nb]);
-            let (zr, zi) = (&mut sc.z.re[..nb], &mut sc.z.im[..nb]);
-            for ((((vr, vi), (yr, yi)), ((dr, di), (wr, wi))), ((lr, li), w)) in qar.iter_mut().zip(qai.iter_mut())
-                .zip(qr.iter().zip(qi.iter())).zip(gnr.iter().zip(gni.iter()).zip(wgr.iter_mut().zip(wgi.iter_mut())))
-                .zip(lr.iter().zip(li).zip(w))
-            {
-                for c in 0..W {
-                    (wr[c], wi[c]) = (w * dr[c], w * di[c]);
-                    vr[c] = lr.mul_add(yr[c], (-li).mul_add(yi[c], wr[c]));
-                    vi[c] = lr.mul_add(yi[c], li.mul_add(yr[c], wi[c]));
-                }
-            }
-            for ((((ar, ai), (gr, gi)), ((dr, di), (zr, zi))), ((lr, li), (wr, wi))) in qar.iter_mut().zip(qai.iter_mut())
-                .zip(gr.iter_mut().zip(gi.iter_mut())).zip(gnr.iter().zip(gni.iter()).zip(zr.iter_mut().zip(zi.iter_mut())))
-                .zip(lr.iter().zip(li).zip(wgr.iter().zip(wgi.iter())))
-            {
-                for c in 0..W {
-                    let (vr, vi) = (ar[c], ai[c]);
-                    ar[c] = lr.mul_add(vr, -li * vi);
-                    ai[c] = lr.mul_add(vi, li * vr);
-                    zr[c] = lr.mul_add(wr[c], -li * wi[c]);
-                    zi[c] = lr.mul_add(wi[c], li * wr[c]);
-                    gr[c] = dr[c];
-                    gi[c] = di[c];
-                }
-            }
-            // Q̃_{n+2} = e·Q + a0·g_{n+1} (+ a1·g_known,n+2).
-            for ((((fr, fi), (yr, yi)), (dr, di)), ((er, ei), (a0r, a0i))) in qfr.iter_mut().zip(qfi.iter_mut())
-                .zip(qr.iter().zip(qi.iter())).zip(gnr.iter().zip(gni.iter()))
-                .zip(er.iter().zip(ei).zip(a0r.iter().zip(a0i)))
-            {
-                for c in 0..W {
-                    fr[c] = er.mul_add(yr[c], (-ei).mul_add(yi[c], a0r.mul_add(dr[c], -a0i * di[c])));
-                    fi[c] = er.mul_add(yi[c], ei.mul_add(yr[c], a0r.mul_add(di[c], a0i * dr[c])));
-                }
-            }
-            if movers.is_some() {
-                for (((fr, fi), (a1r, a1i)), (kr, ki)) in qfr.iter_mut().zip(qfi.iter_mut())
-                    .zip(a1r.iter().zip(a1i)).zip(k1r.iter().zip(k1i))
-                {
-                    let (ar, ai) = (a1r.mul_add(*kr, -a1i * ki), a1r.mul_add(*ki, a1i * kr));
-                    for c in 0..W {
-                        fr[c] += ar;
-                        fi[c] += ai;
+            for c in 0..W {
+                let (dgr, dgi) = (&mut sc.dg.re[..nb], &mut sc.dg.im[..nb]);
+                dgr.fill(0.0);
+                dgi.fill(0.0);
+                // Four ports at a time: one pass over the block's Δg per four.
+                for (v, f) in ports.chunks(4).zip(forces.chunks(4)) {
+                    if let ([v0, v1, v2, v3], [f0, f1, f2, f3]) = (v, f) {
+                        let s = [f0[c], f1[c], f2[c], f3[c]];
+                        axpy4(dgr, [&v0.re[b0..b1], &v1.re[b0..b1], &v2.re[b0..b1], &v3.re[b0..b1]], s);
+                        axpy4(dgi, [&v0.im[b0..b1], &v1.im[b0..b1], &v2.im[b0..b1], &v3.im[b0..b1]], s);
+                    } else {
+                        for (v, f) in v.iter().zip(f) {
+                            axpy(dgr, &v.re[b0..b1], f[c]);
+                            axpy(dgi, &v.im[b0..b1], f[c]);
+                        }
                     }
                 }
-            }
-            for (o, acc) in observers.iter().zip(observed.chunks_exact_mut(4)) {
-                let (or, oi) = (&o.re[b0..b1], &o.im[b0..b1]);
-                cdot::<W>(&mut acc[0], or, oi, qr, qi);
-                cdot::<W>(&mut acc[1], or, oi, qar, qai);
-                cdot::<W>(&mut acc[2], or, oi, zr, zi);
-                cdot::<W>(&mut acc[3], or, oi, wgr, wgi);
-            }
-            for (d, acc) in ports[dampers_from..].iter().zip(damper_free.iter_mut()) {
-                cdot::<W>(acc, &d.re[b0..b1], &d.im[b0..b1], qfr, qfi);
+                let (qfr, qfi) = (&mut qf[c].re[b0..b1], &mut qf[c].im[b0..b1]);
+                let (qr, qi) = (&mut sc.q.re[..nb], &mut sc.q.im[..nb]);
+                // Q = Q̃ + a1·Δg.
+                for (((yr, yi), (fr, fi)), ((dr, di), (a1r, a1i))) in qr.iter_mut().zip(qi.iter_mut())
+                    .zip(qfr.iter().zip(qfi.iter())).zip(dgr.iter().zip(dgi.iter()).zip(a1r.iter().zip(a1i)))
+                {
+                    *yr = a1r.mul_add(*dr, (-a1i).mul_add(*di, *fr));
+                    *yi = a1r.mul_add(*di, a1i.mul_add(*dr, *fi));
+                }
+                // g_{n+1} = Δg + g_known.
+                if let Some((k0, _)) = movers {
+                    for (d, k) in dgr.iter_mut().zip(&k0.re[b0..b1]) {
+                        *d += k;
+                    }
+                    for (d, k) in dgi.iter_mut().zip(&k0.im[b0..b1]) {
+                        *d += k;
+                    }
+                }
+                let (gnr, gni): (&[f64], &[f64]) = (dgr, dgi);
+                // Q̃_{n+2} = e·Q + a0·g_{n+1} (+ a1·g_known,n+2).
+                for ((((fr, fi), (yr, yi)), (dr, di)), ((er, ei), (a0r, a0i))) in qfr.iter_mut().zip(qfi.iter_mut())
+                    .zip(qr.iter().zip(qi.iter())).zip(gnr.iter().zip(gni.iter()))
+                    .zip(er.iter().zip(ei).zip(a0r.iter().zip(a0i)))
+                {
+                    *fr = er.mul_add(*yr, (-ei).mul_add(*yi, a0r.mul_add(*dr, -a0i * di)));
+                    *fi = er.mul_add(*yi, ei.mul_add(*yr, a0r.mul_add(*di, a0i * dr)));
+                }
+                if let Some((_, k1)) = movers {
+                    for (((fr, fi), (a1r, a1i)), (kr, ki)) in qfr.iter_mut().zip(qfi.iter_mut())
+                        .zip(a1r.iter().zip(a1i)).zip(k1.re[b0..b1].iter().zip(&k1.im[b0..b1]))
+                    {
+                        *fr += a1r.mul_add(*kr, -a1i * ki);
+                        *fi += a1r.mul_add(*ki, a1i * kr);
+                    }
+                }
+                for ([o, l2], acc) in observers.iter().zip(observed.chunks_exact_mut(2)) {
+                    let [a0, a1] = acc else { unreachable!() };
+                    let (or, oi, lr, li) = (&o.re[b0..b1], &o.im[b0..b1], &l2.re[b0..b1], &l2.im[b0..b1]);
+                    cdot(&mut a0.0[c], or, oi, qr, qi);
+                    cdot(&mut a1.0[c], lr, li, qr, qi);
+                }
+                // Four dampers at a time: Q̃ read once per four.
+                let dampers = &ports[dampers_from..];
+                for (d, acc) in dampers.chunks(4).zip(damper_free.chunks_mut(4)) {
+                    match (d, acc) {
+                        ([d0, d1, d2, d3], [f0, f1, f2, f3]) => {
+                            let v = [d0, d1, d2, d3].map(|d| (&d.re[b0..b1], &d.im[b0..b1]));
+                            let accs = [&mut f0.0[c], &mut f1.0[c], &mut f2.0[c], &mut f3.0[c]];
+                            cdot4(accs, v, qfr, qfi);
+                        }
+                        (d, acc) => {
+                            for (d, acc) in d.iter().zip(acc) {
+                                cdot(&mut acc.0[c], &d.re[b0..b1], &d.im[b0..b1], qfr, qfi);
+                            }
+                        }
+                    }
+                }
             }
             b0 = b1;
         }

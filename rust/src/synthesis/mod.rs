@@ -24,8 +24,10 @@ mod step;
 pub use run::{run, run_lanes};
 
 use crate::basis::Shape;
-use kernels::CVec;
 use crate::error::{Result, VtbError};
+use kernels::CVec;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// Mode arrays are padded with inert modes (ψ = 0, λ = 0, w = 0) to a multiple of this, the
 /// partial sums of every dot product over the modes.
@@ -48,6 +50,20 @@ pub struct Reduction {
     band: usize,
     /// R between rail DOFs i and i + d at `[i·(band + 1) + d]`, 0 ≤ d ≤ band.
     residual: Vec<f64>,
+    /// Each observer's force-feedthrough gains over the rail's DOFs (`gains`), by shape.
+    gains: Arc<Mutex<HashMap<ShapeKey, Arc<Gains>>>>,
+}
+
+/// A shape vector as a key (its start and the bits of its values).
+type ShapeKey = (usize, Vec<u64>);
+
+/// The direct force terms of an observer's acceleration per unit force at each rail DOF k:
+/// `lw[k]` = Re Σ_j ψ_j(s)·λ_j·w_j·ψ_j(k) and `w[k]` = Re Σ_j ψ_j(s)·w_j·ψ_j(k). Shared by every
+/// run on the reduction that observes the same shape.
+#[derive(Debug)]
+struct Gains {
+    pub lw: Vec<f64>,
+    pub w: Vec<f64>,
 }
 
 fn refuse(field: &str, value: impl std::fmt::Display, why: &str) -> VtbError {
@@ -137,6 +153,7 @@ impl Reduction {
             rail_dofs,
             band,
             residual,
+            gains: Arc::default(),
         })
     }
 
@@ -157,6 +174,46 @@ impl Reduction {
     fn row(&self, i: usize) -> (&[f64], &[f64]) {
         let r = i * self.stride..(i + 1) * self.stride;
         (&self.psi_re[r.clone()], &self.psi_im[r])
+    }
+
+    /// The `Gains` of observers of shapes s whose ψᵀs are given: those not yet known computed
+    /// in one pass over the rail's rows of ψ, then shared.
+    fn gains(&self, observers: &[(&Shape, &CVec)]) -> Vec<Arc<Gains>> {
+        let key =
+            |s: &Shape| -> ShapeKey { (s.start, s.values.iter().map(|v| v.to_bits()).collect()) };
+        let mut cache = self.gains.lock().unwrap_or_else(|e| e.into_inner());
+        let zeros = vec![0.0; self.stride];
+        let missing: Vec<(ShapeKey, CVec, CVec)> = observers
+            .iter()
+            .filter(|(s, _)| !cache.contains_key(&key(s)))
+            .map(|(s, psi)| {
+                let (mut pw, mut lw) = (CVec::zeros(self.stride), CVec::zeros(self.stride));
+                pw.set_mul([&self.weight, &zeros], psi);
+                lw.set_mul([&self.lam_re, &self.lam_im], &pw);
+                (key(s), lw, pw)
+            })
+            .collect();
+        let mut out: Vec<Gains> = missing
+            .iter()
+            .map(|_| Gains {
+                lw: vec![0.0; self.rail_dofs],
+                w: vec![0.0; self.rail_dofs],
+            })
+            .collect();
+        for k in 0..self.rail_dofs {
+            let (rr, ri) = self.row(k);
+            for ((_, lw, pw), g) in missing.iter().zip(out.iter_mut()) {
+                g.lw[k] = kernels::dot(&lw.re, &lw.im, rr, ri);
+                g.w[k] = kernels::dot(&pw.re, &pw.im, rr, ri);
+            }
+        }
+        for ((k, _, _), g) in missing.into_iter().zip(out) {
+            cache.insert(k, Arc::new(g));
+        }
+        observers
+            .iter()
+            .map(|(s, _)| cache[&key(s)].clone())
+            .collect()
     }
 
     /// aᵀ·R·b for two shapes on the rail's DOFs (zero beyond the stored band).

@@ -3,22 +3,27 @@
 //! The jobs of a group share the structure, the speed and the vehicles, so the wheels'
 //! positions, their modal shapes ψᵀs and step compliances are computed once per step for all
 //! of them (`kernels::wheel_pass`); each job has its own modal state, irregularity, contact
-//! forces and dampers' parameters (`kernels::update`).
+//! forces and dampers' parameters (`kernels::update`). A step is a few named phases
+//! ([`Run::step`]): loads, wheel pass, dampers, contact, forces, update, record.
 //!
 //! Within a step the displacements at the wheels and at the dampers' ports are affine in the
 //! unknown forces through the step compliance Re Σ ψ_a·a1·ψ_b + R_ab, so the contact Newton
 //! iterates on the wheel forces alone, as in the finite-element engine. Two loads farther
 //! apart than the residual's reach (`Reduction::band` rail DOFs) have no step compliance:
-//! within one step (40 µs) no wave carries a load that far (the rail's shear wave needs
-//! 0.4 ms per metre), so the full model's value is nil and the truncated modes' remainder is
+//! within one step (50 µs) no wave carries a load that far (the rail's shear wave needs
+//! 0.3 ms per metre), so the full model's value is nil and the truncated modes' remainder is
 //! noise. Tuned inerter dampers are physical elements on fixed ports: the trapezoidal rule on
 //! their internal node gives F = κ(d − d̃) in the relative port displacement d, which is
-//! eliminated exactly. Accelerations are analytic (`kernels::update`) plus the rail
-//! residual's second difference.
+//! eliminated exactly.
+//!
+//! Accelerations are analytic, Q̈ = λ²Q + λw·g + w·ġ per mode: the kernel reads Re Σ λ²ψᵀs·Q;
+//! the force's direct terms Re Σ ψᵀs·λw·g and Re Σ ψᵀs·w·g are sums over the ports of the
+//! force times a gain (`Gains` over the rail's DOFs for the wheels, constants for the
+//! dampers); `records` assembles them with the rail residual's acceleration.
 
-use super::Reduction;
-use super::kernels::{self, Acc, CVec, LVec, Scratch, Update, WheelPass};
+use super::kernels::{self, Acc, CVec, Scratch, Update, WheelPass};
 use super::step::{C, Coefficients};
+use super::{Gains, Reduction};
 use crate::basis::Shape;
 use crate::config::InitialState;
 use crate::contact::{ContactSolver, patch_half_length};
@@ -30,6 +35,7 @@ use crate::simulate::{
     CANCEL_POLL, CarRun, FINITE_POLL, LaneSpec, Mover, finish, note_contact, static_wheel_loads,
 };
 use crate::vehicle::N_WHEELS;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One run on a reduction.
@@ -43,6 +49,33 @@ pub fn run(
     run_lanes::<1>(model, std::slice::from_ref(spec), red, record, cancel)?
         .pop()
         .expect("one lane")
+}
+
+/// W jobs of one model on a reduction: lane c runs on `specs[c]`'s irregularity and damper
+/// parameters. The outer error is shared by all lanes (setup, cancellation); the inner ones
+/// are each lane's own (a failing lane idles while the others go on).
+pub fn run_lanes<const W: usize>(
+    model: &Model,
+    specs: &[LaneSpec],
+    red: &Reduction,
+    record: Record,
+    cancel: Option<&AtomicBool>,
+) -> Result<Vec<Result<RunResult>>> {
+    let mut run = Run::<W>::new(model, specs, red, record)?;
+    run.initial_state()?;
+    for step in 0..run.n_steps {
+        if step % CANCEL_POLL == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(VtbError::Cancelled);
+        }
+        if step % FINITE_POLL == 0 {
+            run.check_finite(step);
+        }
+        if run.lanes.iter().all(|l| l.error.is_some()) {
+            break;
+        }
+        run.step(step);
+    }
+    Ok(run.finish())
 }
 
 /// A damper's shared data: its ports and its step compliance with rail DOFs near it.
@@ -81,18 +114,30 @@ struct Lane<'a> {
     s_inv: Vec<f64>,
     error: Option<VtbError>,
     loss_open: Vec<Option<f64>>,
-    /// The observers' readouts (`kernels::update`) per step, `[(step·no + j)·4 + k]`, and
-    /// the rail observers' residual displacement `[step·n_rail + j]`: the records are made
-    /// of them once the run is over (`records`).
+    /// The observers' readouts per step, `[(step·no + j)·READOUTS + k]`, and the rail
+    /// observers' residual displacement `[step·n_rail + j]`: the records are made of them once
+    /// the run is over (`records`).
     readouts: Vec<f64>,
     residual: Vec<f64>,
 }
 
-/// An observation point of one layer: ψᵀs, and its shape on the rail (for the residual).
+/// An observation point of one layer.
 struct Observer {
-    psi: CVec,
+    /// ψᵀs and λ²ψᵀs (the kernel's readouts).
+    psi: [CVec; 2],
+    /// Its shape on the rail (for the residual).
     rail_shape: Option<Shape>,
+    /// The force's direct terms per unit force at every rail DOF (the wheels).
+    gains: Arc<Gains>,
+    /// The same of each damper port: Re Σ ψᵀs·λw·ψ_d and Re Σ ψᵀs·w·ψ_d.
+    damper_gains: Vec<[f64; 2]>,
+    /// λw·ψᵀs and w·ψᵀs, for the moving forces' modal force (none without).
+    mover_gains: Option<[CVec; 2]>,
 }
+
+/// Readouts per observer and step: d = Re Σ ψᵀs·Q, e = Re Σ λ²ψᵀs·Q, z = Re Σ ψᵀs·λw·g and
+/// y = Re Σ ψᵀs·w·g.
+const READOUTS: usize = 4;
 
 /// The rows `[lo, hi)` of rail DOFs within the residual's reach of a shape.
 fn reach(red: &Reduction, s: &Shape) -> (usize, usize) {
@@ -112,590 +157,704 @@ fn dot(x: &CVec, y: &CVec) -> f64 {
     kernels::dot(&x.re, &x.im, &y.re, &y.im)
 }
 
-/// Re Σ a1·x·y over the modes.
-fn a1_dot(coef: &Coefficients, x: &CVec, y: &CVec) -> f64 {
+/// Re Σ c·x·y over the modes, c per-mode complex constants.
+fn scaled_dot(c: [&[f64]; 2], x: &CVec, y: &CVec) -> f64 {
     let mut t = CVec::zeros(x.re.len());
-    t.set_mul([&coef.a1[0], &coef.a1[1]], x);
+    t.set_mul(c, x);
     dot(&t, y)
 }
 
-/// W jobs of one model on a reduction: lane c runs on `specs[c]`'s irregularity and damper
-/// parameters. The outer error is shared by all lanes (setup, cancellation); the inner ones
-/// are each lane's own (a failing lane idles while the others go on).
-pub fn run_lanes<const W: usize>(
-    model: &Model,
-    specs: &[LaneSpec],
-    red: &Reduction,
-    record: Record,
-    cancel: Option<&AtomicBool>,
-) -> Result<Vec<Result<RunResult>>> {
-    assert_eq!(specs.len(), W, "one lane spec per lane");
-    let cfg = &model.cfg;
-    let st = &model.structure;
-    let layer_dofs = st.base.as_ref().map_or(st.n_dofs, |b| b[0].n);
-    if red.n_dofs != layer_dofs || red.rail_dofs != st.layers[0].n_dofs() {
-        return Err(VtbError::config(
-            "discretisation.synthesis_cutoff",
-            cfg.discretisation.synthesis_cutoff.unwrap_or(0.0),
-            format!(
-                "the reduction has {} DOFs ({} on the rail), the structure {} ({}): it was \
-                 built for another structure",
-                red.n_dofs,
-                red.rail_dofs,
-                layer_dofs,
-                st.layers[0].n_dofs()
-            ),
-        ));
-    }
-    for spec in specs {
-        if spec.dampers.len() != st.tids.len() {
+/// Σ_k s_k·gain[k − start] over the entries of a rail shape within the gain's range.
+fn shape_gain(s: &Shape, start: usize, gain: &[f64]) -> f64 {
+    s.values
+        .iter()
+        .enumerate()
+        .filter_map(|(k, a)| {
+            let i = (s.start + k).checked_sub(start)?;
+            gain.get(i).map(|g| a * g)
+        })
+        .sum()
+}
+
+/// The state of W coupled runs on one reduction.
+struct Run<'a, const W: usize> {
+    model: &'a Model,
+    red: &'a Reduction,
+    coef: Coefficients,
+    n_steps: usize,
+    observers: Vec<Observer>,
+    /// The observers' kernel vectors (`Observer::psi`).
+    observer_psi: Vec<[CVec; 2]>,
+    n_rail: usize,
+    lanes: Vec<Lane<'a>>,
+    // Vehicles and wheels.
+    cars: Vec<CarRun<W>>,
+    loads: Vec<f64>,
+    patch: Vec<f64>,
+    wheel_x0: Vec<f64>,
+    wheel_shapes: Vec<Shape>,
+    /// Ports: the wheels' ψᵀs (refreshed every step), then the dampers' ψᵀ(s_up − s_low).
+    ports: Vec<CVec>,
+    /// Contact forces `[lane·nw + wheel]` (N).
+    p: Vec<f64>,
+    // Dampers.
+    dampers: Vec<DamperPort>,
+    // Moving forces: shapes and modal force at t_{n+1} (now) and t_{n+2} (ahead).
+    movers: Vec<Mover>,
+    shapes_now: Vec<Shape>,
+    shapes_ahead: Vec<Shape>,
+    gk_now: CVec,
+    gk_ahead: CVec,
+    mover_psi: CVec,
+    /// Each lane's free modal state Q̃ for the coming step.
+    q_free: [CVec; W],
+    // Per-step values and scratch (allocated once).
+    diag: Vec<f64>,
+    diag_acc: Vec<Acc<1>>,
+    rail_acc: Vec<Acc<W>>,
+    rail_free: Vec<[f64; W]>,
+    element_flex: Vec<f64>,
+    near_pairs: Vec<f64>,
+    /// Per observer and wheel this step: the rail gains at the wheel's shape (λw, w).
+    wheel_gains: Vec<[f64; 2]>,
+    mover_direct: Vec<[f64; 2]>,
+    gdw: Vec<f64>,
+    t_mat: Vec<f64>,
+    f0: Vec<f64>,
+    tmp: Vec<f64>,
+    amat: Vec<f64>,
+    delta_free: Vec<f64>,
+    forces: Vec<[f64; W]>,
+    observed: Vec<Acc<W>>,
+    /// The kernel's readouts d, e per observer (`[2·o + k]`) of the last step.
+    de: Vec<[f64; W]>,
+    damper_acc: Vec<Acc<W>>,
+    damper_free: Vec<[f64; W]>,
+    scratch: Scratch,
+    res: Vec<RunResult>,
+}
+
+impl<'a, const W: usize> Run<'a, W> {
+    fn new(
+        model: &'a Model,
+        specs: &'a [LaneSpec<'a>],
+        red: &'a Reduction,
+        record: Record,
+    ) -> Result<Self> {
+        assert_eq!(specs.len(), W, "one lane spec per lane");
+        let cfg = &model.cfg;
+        let st = &model.structure;
+        let layer_dofs = st.base.as_ref().map_or(st.n_dofs, |b| b[0].n);
+        if red.n_dofs != layer_dofs || red.rail_dofs != st.layers[0].n_dofs() {
             return Err(VtbError::config(
-                "tids.count",
-                spec.dampers.len(),
+                "discretisation.synthesis_cutoff",
+                cfg.discretisation.synthesis_cutoff.unwrap_or(0.0),
                 format!(
-                    "a lockstep group needs {} dampers in every job",
-                    st.tids.len()
+                    "the reduction has {} DOFs ({} on the rail), the structure {} ({}): it \
+                     was built for another structure",
+                    red.n_dofs,
+                    red.rail_dofs,
+                    layer_dofs,
+                    st.layers[0].n_dofs()
                 ),
             ));
         }
-    }
-    let n = red.stride;
-    let dt = cfg.solver.dt;
-    let g = cfg.solver.gravity;
-    let v = cfg.speed;
-    let coef = Coefficients::new(red, dt);
-    let points = match record {
-        Record::Full => cfg.observation_points(),
-        Record::Metrics => cfg.observation_points()[..1].to_vec(),
-    };
-    crate::budget::check_histories(cfg, record, W)?;
-    let project = |s: &Shape| {
-        let mut p = CVec::zeros(n);
-        kernels::project(red, s, &mut p);
-        p
-    };
-    let observers: Vec<Observer> = (0..st.layers.len())
-        .flat_map(|li| points.iter().map(move |&x| (li, x)))
-        .map(|(li, x)| {
-            let s = st.shape(li, x);
-            Observer {
-                psi: project(&s),
-                rail_shape: (li == 0).then_some(s),
+        for spec in specs {
+            if spec.dampers.len() != st.tids.len() {
+                return Err(VtbError::config(
+                    "tids.count",
+                    spec.dampers.len(),
+                    format!(
+                        "a lockstep group needs {} dampers in every job",
+                        st.tids.len()
+                    ),
+                ));
             }
-        })
-        .collect();
-    let no = observers.len();
-    let observer_psi: Vec<CVec> = observers.iter().map(|o| o.psi.clone()).collect();
-
-    // ------------------------------------------------------------------ vehicles, contact
-    let movers = Mover::all(cfg);
-    let mut cars = model
-        .cars
-        .iter()
-        .map(|c| CarRun::<W>::new(c, dt, g))
-        .collect::<Result<Vec<_>>>()?;
-    let nw = cars.len() * N_WHEELS;
-    let loads = static_wheel_loads(&cars, g);
-    if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
-        return Err(VtbError::config(
-            format!("vehicles[{}]", i / N_WHEELS),
-            l,
-            format!("wheelset {} carries no static load", i % N_WHEELS + 1),
-        ));
-    }
-    let patch: Vec<f64> = loads
-        .iter()
-        .enumerate()
-        .map(|(wi, &load)| {
-            let veh = &cfg.vehicles[wi / N_WHEELS];
-            if veh.contact_patch {
-                patch_half_length(load, veh.wheel_radius, veh.rail_crown_radius)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let hertz: Vec<f64> = cars
-        .iter()
-        .flat_map(|c| [c.car.hertz_g; N_WHEELS])
-        .collect();
-    let wheel_x0: Vec<f64> = cars.iter().flat_map(|c| c.car.wheel_x0).collect();
-
-    // ------------------------------------------------------------------ dampers
-    let nd = st.tids.len();
-    let damper_x: Vec<f64> = cfg.tids.as_ref().map_or_else(Vec::new, |t| {
-        (0..t.count).map(|i| t.x0 + i as f64 * t.spacing).collect()
-    });
-    // Ports: the wheels' ψᵀs (refreshed every step), then the dampers' ψᵀ(s_up − s_low).
-    let mut ports: Vec<CVec> = (0..nw).map(|_| CVec::zeros(n)).collect();
-    let mut damper_ports = Vec::with_capacity(nd);
-    for (a, &x) in st.tids.iter().zip(&damper_x) {
-        let mut psi = project(&a.upper);
-        let low = project(&a.lower);
-        for j in 0..n {
-            psi.re[j] -= low.re[j];
-            psi.im[j] -= low.im[j];
         }
-        let mut scaled = CVec::zeros(n);
-        scaled.set_mul([&coef.a1[0], &coef.a1[1]], &psi);
-        let (lo, hi) = reach(red, &st.shape(0, x));
-        let gain = (lo..hi)
-            .map(|i| {
-                let (rr, ri) = red.row(i);
-                kernels::dot(&scaled.re, &scaled.im, rr, ri)
+        let n = red.stride;
+        let dt = cfg.solver.dt;
+        let g = cfg.solver.gravity;
+        let coef = Coefficients::new(red, dt);
+        let points = match record {
+            Record::Full => cfg.observation_points(),
+            Record::Metrics => cfg.observation_points()[..1].to_vec(),
+        };
+        crate::budget::check_histories(cfg, record, W)?;
+        let project = |s: &Shape| {
+            let mut p = CVec::zeros(n);
+            kernels::project(red, s, &mut p);
+            p
+        };
+        let lam = [&coef.lam[0][..], &coef.lam[1][..]];
+        let zeros = vec![0.0; n];
+        let weight = [&coef.w[..], &zeros[..]];
+
+        // Vehicles and wheels.
+        let cars = model
+            .cars
+            .iter()
+            .map(|c| CarRun::<W>::new(c, dt, g))
+            .collect::<Result<Vec<_>>>()?;
+        let nw = cars.len() * N_WHEELS;
+        let loads = static_wheel_loads(&cars, g);
+        if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
+            return Err(VtbError::config(
+                format!("vehicles[{}]", i / N_WHEELS),
+                l,
+                format!("wheelset {} carries no static load", i % N_WHEELS + 1),
+            ));
+        }
+        let patch: Vec<f64> = loads
+            .iter()
+            .enumerate()
+            .map(|(wi, &load)| {
+                let veh = &cfg.vehicles[wi / N_WHEELS];
+                if veh.contact_patch {
+                    patch_half_length(load, veh.wheel_radius, veh.rail_crown_radius)
+                } else {
+                    0.0
+                }
             })
             .collect();
-        damper_ports.push(DamperPort {
-            upper: a.upper.clone(),
-            gain_start: lo,
-            gain,
+        let hertz: Vec<f64> = cars
+            .iter()
+            .flat_map(|c| [c.car.hertz_g; N_WHEELS])
+            .collect();
+        let wheel_x0: Vec<f64> = cars.iter().flat_map(|c| c.car.wheel_x0).collect();
+        let wheel_shapes: Vec<Shape> = (0..nw)
+            .map(|w| Shape {
+                start: 0,
+                values: Vec::with_capacity(st.wheel_shape_len(patch[w])),
+            })
+            .collect();
+
+        // Dampers: ports, step compliance with the rail near them, and G_dd = Re Σ a1·ψ_d·ψ_e
+        // + R(upper_d, upper_e), the same in every lane.
+        let nd = st.tids.len();
+        let damper_x: Vec<f64> = cfg.tids.as_ref().map_or_else(Vec::new, |t| {
+            (0..t.count).map(|i| t.x0 + i as f64 * t.spacing).collect()
         });
-        ports.push(psi);
-    }
-    // G_dd = Re Σ a1·ψ_d·ψ_e + R(upper_d, upper_e), the same in every lane.
-    let mut g_dd = vec![0.0; nd * nd];
-    for e in 0..nd {
-        for f in 0..nd {
-            g_dd[e * nd + f] = a1_dot(&coef, &ports[nw + e], &ports[nw + f])
-                + red.residual(&damper_ports[e].upper, &damper_ports[f].upper);
-        }
-    }
-    let n_steps = cfg.n_steps();
-    let n_rail = observers.iter().filter(|o| o.rail_shape.is_some()).count();
-    let mut lanes: Vec<Lane> = specs
-        .iter()
-        .map(|spec| {
-            let dampers: Vec<DamperLane> = spec
-                .dampers
-                .iter()
-                .map(|p| {
-                    let (k, c, b) = (p.stiffness, p.damping, p.inertance);
-                    DamperLane {
-                        kappa: 1.0 / (1.0 / (k + 2.0 * c / dt) + dt * dt / (4.0 * b)),
-                        k,
-                        c,
-                        b,
-                        ..Default::default()
-                    }
+        let a1 = [&coef.a1[0][..], &coef.a1[1][..]];
+        let mut ports: Vec<CVec> = (0..nw).map(|_| CVec::zeros(n)).collect();
+        let mut dampers = Vec::with_capacity(nd);
+        for (att, &x) in st.tids.iter().zip(&damper_x) {
+            let mut psi = project(&att.upper);
+            let low = project(&att.lower);
+            for j in 0..n {
+                psi.re[j] -= low.re[j];
+                psi.im[j] -= low.im[j];
+            }
+            let mut scaled = CVec::zeros(n);
+            scaled.set_mul(a1, &psi);
+            let (lo, hi) = reach(red, &st.shape(0, x));
+            let gain = (lo..hi)
+                .map(|i| {
+                    let (rr, ri) = red.row(i);
+                    kernels::dot(&scaled.re, &scaled.im, rr, ri)
                 })
                 .collect();
-            let (s_inv, error) = damper_inverse(&dampers, &g_dd);
-            Lane {
-                spec,
-                contact: ContactSolver::new(
-                    hertz.clone(),
-                    loads.clone(),
-                    cfg.solver.contact_tol,
-                    cfg.solver.contact_max_iter,
-                ),
-                dampers,
-                s_inv,
-                error,
-                loss_open: vec![None; nw],
-                readouts: vec![0.0; (n_steps + 1) * no * READOUTS],
-                residual: vec![0.0; (n_steps + 1) * n_rail],
+            dampers.push(DamperPort {
+                upper: att.upper.clone(),
+                gain_start: lo,
+                gain,
+            });
+            ports.push(psi);
+        }
+        let mut g_dd = vec![0.0; nd * nd];
+        for e in 0..nd {
+            for f in 0..nd {
+                g_dd[e * nd + f] = scaled_dot(a1, &ports[nw + e], &ports[nw + f])
+                    + red.residual(&dampers[e].upper, &dampers[f].upper);
             }
-        })
-        .collect();
+        }
 
-    // ------------------------------------------------------------------ loads
-    let mut wheel_shapes: Vec<Shape> = (0..nw)
-        .map(|w| Shape {
-            start: 0,
-            values: Vec::with_capacity(st.wheel_shape_len(patch[w])),
-        })
-        .collect();
-    let set_wheel_shapes = |t: f64, shapes: &mut [Shape]| {
-        for (w, s) in shapes.iter_mut().enumerate() {
-            st.wheel_shape_into(wheel_x0[w] + v * t, patch[w], s);
+        // Observers: layer by layer, point by point.
+        let movers = Mover::all(cfg);
+        let shapes: Vec<(usize, Shape)> = (0..st.layers.len())
+            .flat_map(|li| points.iter().map(move |&x| (li, x)))
+            .map(|(li, x)| (li, st.shape(li, x)))
+            .collect();
+        let psis: Vec<CVec> = shapes.iter().map(|(_, s)| project(s)).collect();
+        let pairs: Vec<(&Shape, &CVec)> = shapes.iter().map(|(_, s)| s).zip(&psis).collect();
+        let gains = red.gains(&pairs);
+        let mut observers = Vec::with_capacity(shapes.len());
+        for (((li, s), psi), gains) in shapes.into_iter().zip(psis).zip(gains) {
+            let mut pw = CVec::zeros(n);
+            pw.set_mul(weight, &psi);
+            let mut plw = CVec::zeros(n);
+            plw.set_mul(lam, &pw);
+            let mut l2 = CVec::zeros(n);
+            l2.set_mul(lam, &psi);
+            let l2_copy = l2.clone();
+            l2.set_mul(lam, &l2_copy);
+            observers.push(Observer {
+                damper_gains: ports[nw..]
+                    .iter()
+                    .map(|d| [dot(&plw, d), dot(&pw, d)])
+                    .collect(),
+                mover_gains: (!movers.is_empty()).then_some([plw, pw]),
+                psi: [psi, l2],
+                rail_shape: (li == 0).then_some(s),
+                gains,
+            });
         }
-    };
-    let new_mover_shapes = || -> Vec<Shape> {
-        movers
+        let no = observers.len();
+        let n_rail = observers.iter().filter(|o| o.rail_shape.is_some()).count();
+        let observer_psi = observers.iter().map(|o| o.psi.clone()).collect();
+
+        // Lanes.
+        let n_steps = cfg.n_steps();
+        let lanes = specs
             .iter()
-            .map(|mv| Shape {
-                start: 0,
-                values: vec![0.0; st.layers[mv.layer].basis.shape_len()],
+            .map(|spec| {
+                let dampers: Vec<DamperLane> = spec
+                    .dampers
+                    .iter()
+                    .map(|p| {
+                        let (k, c, b) = (p.stiffness, p.damping, p.inertance);
+                        DamperLane {
+                            kappa: 1.0 / (1.0 / (k + 2.0 * c / dt) + dt * dt / (4.0 * b)),
+                            k,
+                            c,
+                            b,
+                            ..Default::default()
+                        }
+                    })
+                    .collect();
+                let (s_inv, error) = damper_inverse(&dampers, &g_dd);
+                Lane {
+                    spec,
+                    contact: ContactSolver::new(
+                        hertz.clone(),
+                        loads.clone(),
+                        cfg.solver.contact_tol,
+                        cfg.solver.contact_max_iter,
+                    ),
+                    dampers,
+                    s_inv,
+                    error,
+                    loss_open: vec![None; nw],
+                    readouts: vec![0.0; (n_steps + 1) * no * READOUTS],
+                    residual: vec![0.0; (n_steps + 1) * n_rail],
+                }
             })
-            .collect()
-    };
-    // The moving forces' shapes at t and their modal force Σ P·ψᵀs into `gk`.
-    let mut mover_psi = CVec::zeros(n);
-    let mut movers_at = |t: f64, gk: &mut CVec, shapes: &mut [Shape]| {
-        gk.re.fill(0.0);
-        gk.im.fill(0.0);
-        for (mv, sh) in movers.iter().zip(shapes.iter_mut()) {
+            .collect();
+        let mover_shapes = || -> Vec<Shape> {
+            movers
+                .iter()
+                .map(|mv| Shape {
+                    start: 0,
+                    values: vec![0.0; st.layers[mv.layer].basis.shape_len()],
+                })
+                .collect()
+        };
+        let res = (0..W)
+            .map(|_| RunResult::new(cfg, st, n_steps, &points, cars.len(), nw, record))
+            .collect();
+        let mut p = vec![0.0; nw * W];
+        for c in 0..W {
+            p[c * nw..(c + 1) * nw].copy_from_slice(&loads);
+        }
+        Ok(Self {
+            model,
+            red,
+            n_steps,
+            observer_psi,
+            n_rail,
+            lanes,
+            loads,
+            patch,
+            wheel_x0,
+            wheel_shapes,
+            ports,
+            p,
+            shapes_now: mover_shapes(),
+            shapes_ahead: mover_shapes(),
+            movers,
+            gk_now: CVec::zeros(n),
+            gk_ahead: CVec::zeros(n),
+            mover_psi: CVec::zeros(n),
+            q_free: std::array::from_fn(|_| CVec::zeros(n)),
+            diag: vec![0.0; nw],
+            diag_acc: vec![Acc::ZERO; nw],
+            rail_acc: vec![Acc::ZERO; nw],
+            rail_free: vec![[0.0; W]; nw],
+            element_flex: vec![0.0; nw],
+            near_pairs: vec![0.0; nw * nw],
+            wheel_gains: vec![[0.0; 2]; no * nw],
+            mover_direct: vec![[0.0; 2]; no],
+            gdw: vec![0.0; nd * nw],
+            t_mat: vec![0.0; W * nd * nw],
+            f0: vec![0.0; W * nd],
+            tmp: vec![0.0; nd],
+            amat: vec![0.0; W * nw * nw],
+            delta_free: vec![0.0; W * nw],
+            forces: vec![[0.0; W]; nw + nd],
+            observed: vec![Acc::ZERO; 2 * no],
+            de: vec![[0.0; W]; 2 * no],
+            damper_acc: vec![Acc::ZERO; nd],
+            damper_free: vec![[0.0; W]; nd],
+            scratch: Scratch::new(),
+            res,
+            observers,
+            dampers,
+            cars,
+            coef,
+        })
+    }
+
+    fn dt(&self) -> f64 {
+        self.model.cfg.solver.dt
+    }
+
+    fn nw(&self) -> usize {
+        self.wheel_shapes.len()
+    }
+
+    /// The moving forces' shapes at t into `shapes` and their modal force Σ P·ψᵀs into `gk`.
+    fn movers_at(&mut self, t: f64, ahead: bool) {
+        let (st, red, v) = (&self.model.structure, self.red, self.model.cfg.speed);
+        let (gk, shapes) = if ahead {
+            (&mut self.gk_ahead, &mut self.shapes_ahead)
+        } else {
+            (&mut self.gk_now, &mut self.shapes_now)
+        };
+        gk.clear();
+        for (mv, sh) in self.movers.iter().zip(shapes.iter_mut()) {
             st.shape_into(mv.layer, mv.x0 + v * t, sh);
-            kernels::project(red, sh, &mut mover_psi);
-            for j in 0..n {
-                gk.re[j] = mv.magnitude.mul_add(mover_psi.re[j], gk.re[j]);
-                gk.im[j] = mv.magnitude.mul_add(mover_psi.im[j], gk.im[j]);
+            kernels::project(red, sh, &mut self.mover_psi);
+            for j in 0..gk.re.len() {
+                gk.re[j] = mv.magnitude.mul_add(self.mover_psi.re[j], gk.re[j]);
+                gk.im[j] = mv.magnitude.mul_add(self.mover_psi.im[j], gk.im[j]);
             }
         }
-    };
-    // The rail's residual displacement at s under the rail's moving forces.
-    let mover_residual = |s: &Shape, shapes: &[Shape]| -> f64 {
-        movers
+    }
+
+    /// The rail's residual displacement at s under the rail's moving forces (now).
+    fn mover_residual(&self, s: &Shape) -> f64 {
+        self.movers
             .iter()
-            .zip(shapes)
+            .zip(&self.shapes_now)
             .filter(|(mv, _)| mv.layer == 0)
-            .map(|(mv, sm)| mv.magnitude * red.residual(s, sm))
+            .map(|(mv, sm)| mv.magnitude * self.red.residual(s, sm))
             .sum()
-    };
-    let wheel_residual = |s: &Shape, shapes: &[Shape], p: &[f64]| -> f64 {
-        shapes
+    }
+
+    /// The rail's residual displacement at s under wheel forces p.
+    fn wheel_residual(&self, s: &Shape, p: &[f64]) -> f64 {
+        self.wheel_shapes
             .iter()
             .zip(p)
-            .map(|(sw, pw)| pw * red.residual(s, sw))
+            .map(|(sw, pw)| pw * self.red.residual(s, sw))
             .sum()
-    };
+    }
 
-    // ------------------------------------------------------------------ t = 0
-    let rest = cfg.solver.initial_state == InitialState::Rest;
-    let mut shapes_now = new_mover_shapes();
-    let mut shapes_ahead = new_mover_shapes();
-    let mut gk_now = CVec::zeros(n);
-    let mut gk_ahead = CVec::zeros(n);
-    movers_at(0.0, &mut gk_now, &mut shapes_now);
-    set_wheel_shapes(0.0, &mut wheel_shapes);
-    let mut g0 = gk_now.clone();
-    for (w, s) in wheel_shapes.iter().enumerate() {
-        kernels::project(red, s, &mut ports[w]);
-        for j in 0..n {
-            g0.re[j] = loads[w].mul_add(ports[w].re[j], g0.re[j]);
-            g0.im[j] = loads[w].mul_add(ports[w].im[j], g0.im[j]);
+    /// The wheels' shapes at t, and the observers' rail gains at them; the moving forces'
+    /// direct terms at the observers.
+    fn place_loads(&mut self, t: f64) {
+        let (st, v) = (&self.model.structure, self.model.cfg.speed);
+        for (w, s) in self.wheel_shapes.iter_mut().enumerate() {
+            st.wheel_shape_into(self.wheel_x0[w] + v * t, self.patch[w], s);
+        }
+        let nw = self.nw();
+        for (o, obs) in self.observers.iter().enumerate() {
+            for (w, s) in self.wheel_shapes.iter().enumerate() {
+                self.wheel_gains[o * nw + w] = [
+                    shape_gain(s, 0, &obs.gains.lw),
+                    shape_gain(s, 0, &obs.gains.w),
+                ];
+            }
+            if let Some([plw, pw]) = &obs.mover_gains {
+                self.mover_direct[o] = [dot(plw, &self.gk_now), dot(pw, &self.gk_now)];
+            }
         }
     }
-    // Q₀: static (λQ + w·g = 0) or at rest; the same in every lane.
-    let mut q0 = CVec::zeros(n);
-    if !rest {
-        for j in 0..red.m {
-            let qj = C(g0.re[j], g0.im[j])
-                .scale(-red.weight[j])
-                .div(C(red.lam_re[j], red.lam_im[j]));
-            (q0.re[j], q0.im[j]) = (qj.0, qj.1);
+
+    /// Static (or rest) initial state at t = 0: the modes, the dampers, the cars, the first
+    /// free state and the first record.
+    fn initial_state(&mut self) -> Result<()> {
+        let cfg = &self.model.cfg;
+        let (red, dt, g) = (self.red, cfg.solver.dt, cfg.solver.gravity);
+        let n = red.stride;
+        let nw = self.nw();
+        let rest = cfg.solver.initial_state == InitialState::Rest;
+        self.movers_at(0.0, false);
+        self.place_loads(0.0);
+        let mut g0 = self.gk_now.clone();
+        for w in 0..nw {
+            kernels::project(red, &self.wheel_shapes[w], &mut self.ports[w]);
+            for j in 0..n {
+                g0.re[j] = self.loads[w].mul_add(self.ports[w].re[j], g0.re[j]);
+                g0.im[j] = self.loads[w].mul_add(self.ports[w].im[j], g0.im[j]);
+            }
         }
-    }
-    let static_share = |u: f64| if rest { 0.0 } else { u };
-    let p0 = loads.clone();
-    let static_residual = |s: &Shape| {
-        static_share(wheel_residual(s, &wheel_shapes, &p0) + mover_residual(s, &shapes_now))
-    };
-    let d0: Vec<f64> = (0..nd)
-        .map(|d| {
-            dot(&ports[nw + d], &q0) + static_residual(&damper_ports[d].upper)
-        })
-        .collect();
-    let rail0: Vec<f64> = (0..nw)
-        .map(|w| dot(&ports[w], &q0) + static_residual(&wheel_shapes[w]))
-        .collect();
-    for lane in lanes.iter_mut() {
-        for (d, s) in lane.dampers.iter_mut().zip(&d0) {
-            d.s = *s;
+        // Q₀: static (λQ + w·g = 0) or at rest; the same in every lane.
+        let mut q0 = CVec::zeros(n);
+        if !rest {
+            for j in 0..red.m {
+                let qj = C(g0.re[j], g0.im[j])
+                    .scale(-red.weight[j])
+                    .div(C(red.lam_re[j], red.lam_im[j]));
+                (q0.re[j], q0.im[j]) = (qj.0, qj.1);
+            }
         }
-    }
-    for (ci, c) in cars.iter_mut().enumerate() {
-        for (lane, l) in lanes.iter().enumerate() {
-            let rail: [f64; N_WHEELS] = std::array::from_fn(|w| {
-                let wi = ci * N_WHEELS + w;
-                rail0[wi] + cfg.irregularity_share(0.0) * l.spec.profile.at(wheel_x0[wi])
+        let share = if rest { 0.0 } else { 1.0 };
+        let static_residual =
+            |s: &Shape| share * (self.wheel_residual(s, &self.loads) + self.mover_residual(s));
+        let d0: Vec<f64> = (0..self.dampers.len())
+            .map(|d| dot(&self.ports[nw + d], &q0) + static_residual(&self.dampers[d].upper))
+            .collect();
+        let rail0: Vec<f64> = (0..nw)
+            .map(|w| dot(&self.ports[w], &q0) + static_residual(&self.wheel_shapes[w]))
+            .collect();
+        for lane in self.lanes.iter_mut() {
+            for (d, s) in lane.dampers.iter_mut().zip(&d0) {
+                d.s = *s;
+            }
+        }
+        for (ci, c) in self.cars.iter_mut().enumerate() {
+            for (lane, l) in self.lanes.iter().enumerate() {
+                let rail: [f64; N_WHEELS] = std::array::from_fn(|w| {
+                    let wi = ci * N_WHEELS + w;
+                    rail0[wi] + cfg.irregularity_share(0.0) * l.spec.profile.at(self.wheel_x0[wi])
+                });
+                c.set_static(
+                    lane,
+                    rail,
+                    &self.loads[ci * N_WHEELS..(ci + 1) * N_WHEELS],
+                    g,
+                )?;
+            }
+            let pc: [f64; GW] = std::array::from_fn(|w| {
+                if w < N_WHEELS {
+                    self.loads[ci * N_WHEELS + w]
+                } else {
+                    0.0
+                }
             });
-            c.set_static(lane, rail, &loads[ci * N_WHEELS..(ci + 1) * N_WHEELS], g)?;
+            c.set_force(&[pc; W]);
         }
-        let pc: [f64; GW] =
-            std::array::from_fn(|w| if w < N_WHEELS { loads[ci * N_WHEELS + w] } else { 0.0 });
-        c.set_force(&[pc; W]);
-    }
-    // The lanes' state: Q̃₁ = e·Q₀ + a0·g₀ + a1·g_known(t₁), and g₀.
-    movers_at(dt, &mut gk_ahead, &mut shapes_ahead);
-    let mut q_free = LVec::<W>::zeros(n);
-    let mut g_lanes = LVec::<W>::zeros(n);
-    let mut qa0 = CVec::zeros(n);
-    for j in 0..n {
-        let (q, gj, k1) = (
-            C(q0.re[j], q0.im[j]),
-            C(g0.re[j], g0.im[j]),
-            C(gk_ahead.re[j], gk_ahead.im[j]),
-        );
-        let lam = C(coef.lam[0][j], coef.lam[1][j]);
-        let qf = C(coef.e[0][j], coef.e[1][j])
-            .mul(q)
-            .add(C(coef.a0[0][j], coef.a0[1][j]).mul(gj))
-            .add(coef.a1_at(j).mul(k1));
-        let qa = lam.mul(lam.mul(q).add(gj.scale(coef.w[j])));
-        // (The force-rate term w·ġ of Q̈ is zero: the loads stood still before t = 0.)
-        (qa0.re[j], qa0.im[j]) = (qa.0, qa.1);
-        for c in 0..W {
-            q_free.set(j, c, (qf.0, qf.1));
-            g_lanes.set(j, c, (gj.0, gj.1));
+        // Q̃₁ = e·Q₀ + a0·g₀ + a1·g_known(t₁), the dampers' free displacement under it.
+        self.movers_at(dt, true);
+        let coef = &self.coef;
+        for j in 0..n {
+            let (q, gj, k1) = (
+                C(q0.re[j], q0.im[j]),
+                C(g0.re[j], g0.im[j]),
+                C(self.gk_ahead.re[j], self.gk_ahead.im[j]),
+            );
+            let qf = C(coef.e[0][j], coef.e[1][j])
+                .mul(q)
+                .add(C(coef.a0[0][j], coef.a0[1][j]).mul(gj))
+                .add(coef.a1_at(j).mul(k1));
+            for c in 0..W {
+                (self.q_free[c].re[j], self.q_free[c].im[j]) = (qf.0, qf.1);
+            }
         }
+        for d in 0..self.dampers.len() {
+            self.damper_free[d] = [dot(&self.ports[nw + d], &self.q_free[0]); W];
+        }
+        // The first readouts: d, e of Q₀, the loads' direct terms.
+        for (o, obs) in self.observers.iter().enumerate() {
+            for k in 0..2 {
+                self.de[2 * o + k] = [dot(&obs.psi[k], &q0); W];
+            }
+        }
+        self.record(0);
+        Ok(())
     }
-    let d_free0: Vec<f64> = (0..nd)
-        .map(|d| dot(&ports[nw + d], &q_free.lane(0)))
-        .collect();
-    let mut damper_free = vec![Acc::<W>::ZERO; nd];
-    let mut damper_free_now: Vec<[f64; W]> = d_free0.iter().map(|&x| [x; W]).collect();
 
-    let mut res: Vec<RunResult> = (0..W)
-        .map(|_| RunResult::new(cfg, st, n_steps, &points, cars.len(), nw, record))
-        .collect();
-    let mut wg0 = g0.clone();
-    wg0.set_mul([&coef.w, &vec![0.0; n]], &g0);
-    let mut lwg0 = wg0.clone();
-    lwg0.set_mul([&coef.lam[0], &coef.lam[1]], &wg0);
-    let mut observed_now: Vec<[f64; W]> = observers
-        .iter()
-        .flat_map(|o| [&q0, &qa0, &lwg0, &wg0].map(|x| [dot(&o.psi, x); W]))
-        .collect();
-    let mut p = vec![0.0; nw * W];
-    for c in 0..W {
-        p[c * nw..(c + 1) * nw].copy_from_slice(&loads);
-    }
-    // Observers, vehicles and contact forces of every live lane at `step`.
-    let record_step = |res: &mut [RunResult],
-                       lanes: &mut [Lane],
-                       step: usize,
-                       observed: &[[f64; W]],
-                       shapes: &[Shape],
-                       movers_now: &[Shape],
-                       p: &[f64],
-                       cars: &[CarRun<W>]| {
-        for (c, (r, lane)) in res.iter_mut().zip(lanes.iter_mut()).enumerate() {
-            if lane.error.is_some() {
-                continue;
-            }
-            let pl = &p[c * nw..(c + 1) * nw];
-            let at = step * no * READOUTS;
-            for (k, x) in lane.readouts[at..at + no * READOUTS].iter_mut().enumerate() {
-                *x = observed[k][c];
-            }
-            for (j, o) in observers.iter().enumerate() {
-                if let Some(s) = &o.rail_shape {
-                    lane.residual[step * n_rail + j] =
-                        wheel_residual(s, shapes, pl) + mover_residual(s, movers_now);
-                }
-            }
-            let (ncars, ndof) = (r.n_cars, r.vehicle_dofs);
-            for (ci, car) in cars.iter().take(ncars).enumerate() {
-                for i in 0..ndof {
-                    let (z, _, a) = car.nm.observed(i, c);
-                    r.vehicle_disp[(step * ncars + ci) * ndof + i] = z - car.z0[i * W + c];
-                    r.vehicle_acc[(step * ncars + ci) * ndof + i] = a;
-                }
-            }
-            r.contact_force[step * nw..(step + 1) * nw].copy_from_slice(pl);
-        }
-    };
-    record_step(
-        &mut res,
-        &mut lanes,
-        0,
-        &observed_now,
-        &wheel_shapes,
-        &shapes_now,
-        &p,
-        &cars,
-    );
-
-    // ------------------------------------------------------------------ the steps
-    let mut scratch = Scratch::<W>::new();
-    let mut observed = vec![Acc::<W>::ZERO; READOUTS * no];
-    let mut forces = vec![[0.0; W]; nw + nd];
-    let mut diag = vec![0.0; nw];
-    let mut diag_acc = vec![Acc::<1>::ZERO; nw];
-    let mut rail_acc = vec![Acc::<W>::ZERO; nw];
-    let mut near_pairs = vec![0.0; nw * nw];
-    let mut rail_free = vec![[0.0; W]; nw];
-    let mut element_flex = vec![0.0; nw];
-    let mut gdw = vec![0.0; nd * nw];
-    let mut t_mat = vec![0.0; W * nd * nw];
-    let mut f0 = vec![0.0; W * nd];
-    let mut tmp = vec![0.0; nd];
-    let mut amat = vec![0.0; W * nw * nw];
-    let mut delta_free = vec![0.0; W * nw];
-    for step in 0..n_steps {
-        if step % CANCEL_POLL == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            return Err(VtbError::Cancelled);
-        }
-        if step % FINITE_POLL == 0 {
-            for (c, lane) in lanes.iter_mut().enumerate() {
-                if lane.error.is_none() && !q_free.lane_finite(c) {
-                    fail(
-                        lane,
-                        c,
-                        &mut q_free,
-                        &mut g_lanes,
-                        &mut p,
-                        &mut cars,
-                        VtbError::Solver(format!(
-                            "the modal coordinates became non-finite by step {step}: an \
-                             overflow, most likely from parameters of extreme magnitude"
-                        )),
-                    );
-                }
-            }
-        }
-        if lanes.iter().all(|l| l.error.is_some()) {
-            break;
-        }
+    /// One step, t_n → t_{n+1}.
+    fn step(&mut self, step: usize) {
+        let dt = self.dt();
         let t1 = (step + 1) as f64 * dt;
-        let share = cfg.irregularity_share(t1);
-        if !movers.is_empty() {
-            std::mem::swap(&mut shapes_now, &mut shapes_ahead);
-            std::mem::swap(&mut gk_now, &mut gk_ahead);
-            movers_at(t1 + dt, &mut gk_ahead, &mut shapes_ahead);
+        if !self.movers.is_empty() {
+            std::mem::swap(&mut self.shapes_now, &mut self.shapes_ahead);
+            std::mem::swap(&mut self.gk_now, &mut self.gk_ahead);
+            self.movers_at(t1 + dt, true);
         }
-        // The wheel pass (shared): ψᵀs, step compliances, free rail displacements.
-        set_wheel_shapes(t1, &mut wheel_shapes);
+        self.place_loads(t1);
+        self.wheel_pass(t1);
+        self.damper_terms();
+        self.contact(step, t1);
+        self.forces();
+        self.update();
+        self.end_cars(t1);
+        self.record(step + 1);
+    }
+
+    /// The wheel pass (shared): ψᵀs, step compliances, free rail displacements, the wheels'
+    /// element flexibility, and their step compliance with the dampers.
+    fn wheel_pass(&mut self, t1: f64) {
+        let (red, st, cfg) = (self.red, &self.model.structure, &self.model.cfg);
+        let nw = self.nw();
         kernels::wheel_pass::<W>(
             red,
-            &coef,
-            &q_free,
+            &self.coef,
+            &self.q_free,
             WheelPass {
-                shapes: &wheel_shapes,
-                outs: &mut ports[..nw],
-                diag: &mut diag_acc,
-                rail: &mut rail_acc,
+                shapes: &self.wheel_shapes,
+                outs: &mut self.ports[..nw],
+                diag: &mut self.diag_acc,
+                rail: &mut self.rail_acc,
             },
         );
         for w in 0..nw {
-            diag[w] = diag_acc[w].sum()[0] + red.residual(&wheel_shapes[w], &wheel_shapes[w]);
-            rail_free[w] = rail_acc[w].sum();
-            element_flex[w] = if cfg.discretisation.element_flexibility {
-                st.wheel_flexibility(wheel_x0[w] + v * t1, patch[w])
+            let s = &self.wheel_shapes[w];
+            self.diag[w] = self.diag_acc[w].sum()[0] + red.residual(s, s);
+            self.rail_free[w] = self.rail_acc[w].sum();
+            self.element_flex[w] = if cfg.discretisation.element_flexibility {
+                st.wheel_flexibility(self.wheel_x0[w] + cfg.speed * t1, self.patch[w])
             } else {
                 0.0
             };
         }
+        let a1 = [&self.coef.a1[0][..], &self.coef.a1[1][..]];
         for wi in 0..nw {
             for vi in wi + 1..nw {
-                let a = if near(red, &wheel_shapes[wi], &wheel_shapes[vi]) {
-                    a1_dot(&coef, &ports[wi], &ports[vi])
-                        + red.residual(&wheel_shapes[wi], &wheel_shapes[vi])
+                let (a, b) = (&self.wheel_shapes[wi], &self.wheel_shapes[vi]);
+                self.near_pairs[wi * nw + vi] = if near(red, a, b) {
+                    scaled_dot(a1, &self.ports[wi], &self.ports[vi]) + red.residual(a, b)
                 } else {
                     0.0
                 };
-                near_pairs[wi * nw + vi] = a;
             }
         }
-        for (e, dp) in damper_ports.iter().enumerate() {
-            for (w, sw) in wheel_shapes.iter().enumerate() {
-                let modal: f64 = sw
-                    .values
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(k, a)| {
-                        let i = (sw.start + k).checked_sub(dp.gain_start)?;
-                        dp.gain.get(i).map(|g| a * g)
-                    })
-                    .sum();
-                gdw[e * nw + w] = modal + red.residual(&dp.upper, sw);
+        for (e, dp) in self.dampers.iter().enumerate() {
+            for (w, sw) in self.wheel_shapes.iter().enumerate() {
+                self.gdw[e * nw + w] =
+                    shape_gain(sw, dp.gain_start, &dp.gain) + red.residual(&dp.upper, sw);
             }
         }
-        // The dampers of each lane: F = F0 + T·P.
-        for (c, lane) in lanes.iter_mut().enumerate() {
-            if lane.error.is_some() || nd == 0 {
+    }
+
+    /// Each lane's dampers this step: their force F = F0 + T·P in the wheel forces P.
+    fn damper_terms(&mut self) {
+        let dt = self.dt();
+        let (nw, nd) = (self.nw(), self.dampers.len());
+        if nd == 0 {
+            return;
+        }
+        for c in 0..W {
+            if self.lanes[c].error.is_some() {
                 continue;
             }
-            let (f0, t_mat) = (
-                &mut f0[c * nd..(c + 1) * nd],
-                &mut t_mat[c * nd * nw..(c + 1) * nd * nw],
-            );
-            for (e, d) in lane.dampers.iter_mut().enumerate() {
+            for e in 0..nd {
+                let free = self.damper_free[e][c] + self.mover_residual(&self.dampers[e].upper);
+                let d = &mut self.lanes[c].dampers[e];
                 d.r_hat = d.c * (2.0 * d.r / dt + d.rd) / (d.k + 2.0 * d.c / dt);
                 d.s_tilde = d.s + dt * d.sd + 0.25 * dt * dt * d.sdd;
-                let free = damper_free_now[e][c] + mover_residual(&damper_ports[e].upper, &shapes_now);
-                f0[e] = d.kappa * (free - d.r_hat - d.s_tilde);
+                self.f0[c * nd + e] = d.kappa * (free - d.r_hat - d.s_tilde);
                 for w in 0..nw {
-                    t_mat[e * nw + w] = d.kappa * gdw[e * nw + w];
+                    self.t_mat[(c * nd + e) * nw + w] = d.kappa * self.gdw[e * nw + w];
                 }
             }
             // F0 ← S⁻¹·F0, T ← S⁻¹·T.
-            let s_inv = &lane.s_inv;
-            tmp.copy_from_slice(f0);
+            let s_inv = &self.lanes[c].s_inv;
+            let f0 = &mut self.f0[c * nd..(c + 1) * nd];
+            self.tmp.copy_from_slice(f0);
             for e in 0..nd {
-                f0[e] = (0..nd).map(|f| s_inv[e * nd + f] * tmp[f]).sum();
+                f0[e] = (0..nd).map(|f| s_inv[e * nd + f] * self.tmp[f]).sum();
             }
+            let t_mat = &mut self.t_mat[c * nd * nw..(c + 1) * nd * nw];
             for w in 0..nw {
                 for e in 0..nd {
-                    tmp[e] = t_mat[e * nw + w];
+                    self.tmp[e] = t_mat[e * nw + w];
                 }
                 for e in 0..nd {
-                    t_mat[e * nw + w] = (0..nd).map(|f| s_inv[e * nd + f] * tmp[f]).sum();
+                    t_mat[e * nw + w] = (0..nd).map(|f| s_inv[e * nd + f] * self.tmp[f]).sum();
                 }
             }
         }
-        // The wheels: δ = δ_free − A·P.
-        for (ci, car) in cars.iter_mut().enumerate() {
+    }
+
+    /// The contact: δ = δ_free − A·P per lane, solved by each lane's Newton.
+    fn contact(&mut self, step: usize, t1: f64) {
+        let cfg = &self.model.cfg;
+        let (v, share) = (cfg.speed, cfg.irregularity_share(t1));
+        let (nw, nd) = (self.nw(), self.dampers.len());
+        for ci in 0..self.cars.len() {
+            let car = &mut self.cars[ci];
             car.nm.begin_step(&car.f_prev, &car.gravity);
             let wheel = car.nm.free_port_disp(&car.ports);
-            for (c, lane) in lanes.iter().enumerate() {
+            for c in 0..W {
                 for w in 0..N_WHEELS {
                     let wi = ci * N_WHEELS + w;
-                    let mut rail = rail_free[wi][c]
-                        + mover_residual(&wheel_shapes[wi], &shapes_now);
+                    let mut rail =
+                        self.rail_free[wi][c] + self.mover_residual(&self.wheel_shapes[wi]);
                     for e in 0..nd {
-                        rail -= gdw[e * nw + wi] * f0[c * nd + e];
+                        rail -= self.gdw[e * nw + wi] * self.f0[c * nd + e];
                     }
-                    delta_free[c * nw + wi] =
-                        wheel[c][w] - rail - share * lane.spec.profile.at(wheel_x0[wi] + v * t1);
+                    let x = self.wheel_x0[wi] + v * t1;
+                    self.delta_free[c * nw + wi] =
+                        wheel[c][w] - rail - share * self.lanes[c].spec.profile.at(x);
                 }
             }
         }
         for c in 0..W {
-            let a = &mut amat[c * nw * nw..(c + 1) * nw * nw];
-            let t_mat = &t_mat[c * nd * nw..(c + 1) * nd * nw];
+            let a = &mut self.amat[c * nw * nw..(c + 1) * nw * nw];
+            let t_mat = &self.t_mat[c * nd * nw..(c + 1) * nd * nw];
             for wi in 0..nw {
                 for vi in wi..nw {
                     let mut x = if wi == vi {
-                        diag[wi] + element_flex[wi]
+                        self.diag[wi] + self.element_flex[wi]
                     } else {
-                        near_pairs[wi * nw + vi]
+                        self.near_pairs[wi * nw + vi]
                     };
                     for e in 0..nd {
-                        x -= gdw[e * nw + wi] * t_mat[e * nw + vi];
+                        x -= self.gdw[e * nw + wi] * t_mat[e * nw + vi];
                     }
                     let (ci, cj) = (wi / N_WHEELS, vi / N_WHEELS);
                     if ci == cj {
-                        x += cars[ci].car.rails * cars[ci].compliance[wi % N_WHEELS][vi % N_WHEELS];
+                        let car = &self.cars[ci];
+                        x += car.car.rails * car.compliance[wi % N_WHEELS][vi % N_WHEELS];
                     }
                     a[wi * nw + vi] = x;
                     a[vi * nw + wi] = x;
                 }
             }
         }
-        for (c, lane) in lanes.iter_mut().enumerate() {
-            if lane.error.is_some() || nw == 0 {
+        if nw == 0 {
+            return;
+        }
+        for c in 0..W {
+            if self.lanes[c].error.is_some() {
                 continue;
             }
-            let solved = lane.contact.solve(
-                &mut p[c * nw..(c + 1) * nw],
-                &delta_free[c * nw..(c + 1) * nw],
-                &amat[c * nw * nw..(c + 1) * nw * nw],
+            let solved = self.lanes[c].contact.solve(
+                &mut self.p[c * nw..(c + 1) * nw],
+                &self.delta_free[c * nw..(c + 1) * nw],
+                &self.amat[c * nw * nw..(c + 1) * nw * nw],
                 t1,
                 step + 1,
             );
             if let Err(e) = solved {
-                fail(lane, c, &mut q_free, &mut g_lanes, &mut p, &mut cars, e);
+                self.fail(c, e);
             }
         }
-        // Forces known: the dampers' forces and states.
-        for (c, lane) in lanes.iter_mut().enumerate() {
+    }
+
+    /// The ports' forces of every lane once the wheels' are known, and the dampers' states.
+    fn forces(&mut self) {
+        let dt = self.dt();
+        let (nw, nd) = (self.nw(), self.dampers.len());
+        for c in 0..W {
             for w in 0..nw {
-                forces[w][c] = p[c * nw + w];
+                self.forces[w][c] = self.p[c * nw + w];
             }
-            if lane.error.is_some() {
+            if self.lanes[c].error.is_some() {
                 for e in 0..nd {
-                    forces[nw + e][c] = 0.0;
+                    self.forces[nw + e][c] = 0.0;
                 }
                 continue;
             }
-            for (e, d) in lane.dampers.iter_mut().enumerate() {
-                let f: f64 = f0[c * nd + e]
+            for e in 0..nd {
+                let f: f64 = self.f0[c * nd + e]
                     + (0..nw)
-                        .map(|w| t_mat[c * nd * nw + e * nw + w] * p[c * nw + w])
+                        .map(|w| self.t_mat[(c * nd + e) * nw + w] * self.p[c * nw + w])
                         .sum::<f64>();
-                forces[nw + e][c] = -f;
+                self.forces[nw + e][c] = -f;
+                let d = &mut self.lanes[c].dampers[e];
                 let r1 = f / (d.k + 2.0 * d.c / dt) + d.r_hat;
                 d.rd = 2.0 * (r1 - d.r) / dt - d.rd;
                 d.r = r1;
@@ -706,33 +865,41 @@ pub fn run_lanes<const W: usize>(
                 d.sdd = sdd1;
             }
         }
-        // The update pass: the modes stepped, observers and damper ports read.
+    }
+
+    /// The update pass: the modes stepped, the observers and damper ports read.
+    fn update(&mut self) {
+        let nw = self.nw();
         kernels::update::<W>(
             Update {
-                coef: &coef,
-                ports: &ports,
-                forces: &forces,
-                movers: (!movers.is_empty()).then_some((&gk_now, &gk_ahead)),
-                observers: &observer_psi,
-                observed: &mut observed,
+                coef: &self.coef,
+                ports: &self.ports,
+                forces: &self.forces,
+                movers: (!self.movers.is_empty()).then_some((&self.gk_now, &self.gk_ahead)),
+                observers: &self.observer_psi,
+                observed: &mut self.observed,
                 dampers_from: nw,
-                damper_free: &mut damper_free,
+                damper_free: &mut self.damper_acc,
             },
-            &mut q_free,
-            &mut g_lanes,
-            &mut scratch,
+            &mut self.q_free,
+            &mut self.scratch,
         );
-        for (o, acc) in observed_now.iter_mut().zip(&observed) {
-            *o = acc.sum();
-        }
-        for (d, acc) in damper_free_now.iter_mut().zip(&damper_free) {
+        for (d, acc) in self.damper_free.iter_mut().zip(&self.damper_acc) {
             *d = acc.sum();
         }
-        for (ci, car) in cars.iter_mut().enumerate() {
+        for (x, acc) in self.de.iter_mut().zip(&self.observed) {
+            *x = acc.sum();
+        }
+    }
+
+    /// The cars take the wheel forces; contact-loss periods are noted.
+    fn end_cars(&mut self, t1: f64) {
+        let nw = self.nw();
+        for (ci, car) in self.cars.iter_mut().enumerate() {
             let pc: [[f64; GW]; W] = std::array::from_fn(|c| {
                 std::array::from_fn(|w| {
                     if w < N_WHEELS {
-                        p[c * nw + ci * N_WHEELS + w]
+                        self.p[c * nw + ci * N_WHEELS + w]
                     } else {
                         0.0
                     }
@@ -743,43 +910,105 @@ pub fn run_lanes<const W: usize>(
             car.nm.end_step();
             car.set_force(&pc);
         }
-        for (c, lane) in lanes.iter_mut().enumerate() {
+        for (c, lane) in self.lanes.iter_mut().enumerate() {
             if lane.error.is_none() {
                 note_contact(
                     &mut lane.loss_open,
-                    &p[c * nw..(c + 1) * nw],
+                    &self.p[c * nw..(c + 1) * nw],
                     t1,
-                    &mut res[c].contact_loss,
+                    &mut self.res[c].contact_loss,
                 );
             }
         }
-        record_step(
-            &mut res,
-            &mut lanes,
-            step + 1,
-            &observed_now,
-            &wheel_shapes,
-            &shapes_now,
-            &p,
-            &cars,
-        );
     }
-    Ok(lanes
-        .into_iter()
-        .zip(res)
-        .map(|(lane, mut r)| match lane.error {
-            Some(e) => Err(e),
-            None => {
-                records(&mut r, &lane.readouts, &lane.residual, no, n_rail, dt);
-                finish(&lane.loss_open, r)
-            }
-        })
-        .collect())
-}
 
-/// Readouts per observer and step (`kernels::update`): d = Re Σ ψᵀs·Q, a = Re Σ ψᵀs·λ(λQ +
-/// w·g), z = Re Σ ψᵀs·λw·g, y = Re Σ ψᵀs·w·g.
-const READOUTS: usize = 4;
+    /// The readouts of every live lane at `step` (the force's direct terms from the ports'
+    /// forces this step), the rail residual, the vehicles and the contact forces.
+    fn record(&mut self, step: usize) {
+        let (nw, no, n_rail) = (self.nw(), self.observers.len(), self.n_rail);
+        for c in 0..W {
+            if self.lanes[c].error.is_some() {
+                continue;
+            }
+            let pl = &self.p[c * nw..(c + 1) * nw];
+            for (o, obs) in self.observers.iter().enumerate() {
+                // z = Re Σ ψᵀs·λw·g and y = Re Σ ψᵀs·w·g, g = Σ ports' forces·ψᵀ(port).
+                let mut zy = self.mover_direct[o];
+                for (w, pw) in pl.iter().enumerate() {
+                    let gw = self.wheel_gains[o * nw + w];
+                    zy = [pw.mul_add(gw[0], zy[0]), pw.mul_add(gw[1], zy[1])];
+                }
+                for (e, gd) in obs.damper_gains.iter().enumerate() {
+                    let f = self.forces[nw + e][c];
+                    zy = [f.mul_add(gd[0], zy[0]), f.mul_add(gd[1], zy[1])];
+                }
+                let at = (step * no + o) * READOUTS;
+                self.lanes[c].readouts[at..at + READOUTS].copy_from_slice(&[
+                    self.de[2 * o][c],
+                    self.de[2 * o + 1][c],
+                    zy[0],
+                    zy[1],
+                ]);
+                if let Some(s) = &obs.rail_shape {
+                    self.lanes[c].residual[step * n_rail + o] =
+                        self.wheel_residual(s, pl) + self.mover_residual(s);
+                }
+            }
+            let r = &mut self.res[c];
+            let (ncars, ndof) = (r.n_cars, r.vehicle_dofs);
+            for (ci, car) in self.cars.iter().take(ncars).enumerate() {
+                for i in 0..ndof {
+                    let (z, _, a) = car.nm.observed(i, c);
+                    r.vehicle_disp[(step * ncars + ci) * ndof + i] = z - car.z0[i * W + c];
+                    r.vehicle_acc[(step * ncars + ci) * ndof + i] = a;
+                }
+            }
+            r.contact_force[step * nw..(step + 1) * nw].copy_from_slice(pl);
+        }
+    }
+
+    /// A non-finite state (overflow from extreme parameters) fails its lane.
+    fn check_finite(&mut self, step: usize) {
+        for c in 0..W {
+            if self.lanes[c].error.is_none() && !self.q_free[c].is_finite() {
+                self.fail(
+                    c,
+                    VtbError::Solver(format!(
+                        "the modal coordinates became non-finite by step {step}: an overflow, \
+                         most likely from parameters of extreme magnitude"
+                    )),
+                );
+            }
+        }
+    }
+
+    /// Lane c failed: keep the error and zero its state so that it idles finite.
+    fn fail(&mut self, c: usize, e: VtbError) {
+        let nw = self.nw();
+        self.lanes[c].error = Some(e);
+        self.q_free[c].clear();
+        self.p[c * nw..(c + 1) * nw].fill(0.0);
+        for car in &mut self.cars {
+            car.nm.clear_lane(c);
+        }
+    }
+
+    /// Each lane's result: its records made of its readouts, or its error.
+    fn finish(self) -> Vec<Result<RunResult>> {
+        let (no, n_rail, dt) = (self.observers.len(), self.n_rail, self.dt());
+        self.lanes
+            .into_iter()
+            .zip(self.res)
+            .map(|(lane, mut r)| match lane.error {
+                Some(e) => Err(e),
+                None => {
+                    records(&mut r, &lane.readouts, &lane.residual, no, n_rail, dt);
+                    finish(&lane.loss_open, r)
+                }
+            })
+            .collect()
+    }
+}
 
 /// A record of n samples padded by two on each side: constant before t = 0 (the loads stood
 /// still), linear past the end.
@@ -797,7 +1026,7 @@ fn padded(n: usize, f: impl Fn(usize) -> f64) -> Vec<f64> {
 /// The displacement and acceleration records of a finished run from its readouts and the rail
 /// residual r (`[step·no + j]` in `r.disp`, `r.acc`):
 ///
-///   u = E(d) + r,   ü = E(a − z + D₂r) + z + D₁y.
+///   u = E(d) + r,   ü = E(e + D₂r) + z + D₁y.
 ///
 /// The modes' response to the piecewise-linear force through the force samples is the true
 /// response low-passed by sinc²(ωh/2) at every sample, and so is the second difference D₂ of
@@ -805,20 +1034,33 @@ fn padded(n: usize, f: impl Fn(usize) -> f64) -> Vec<f64> {
 /// 1 + (1 − cos ωh)/6 is 1/sinc²(ωh/2) to O((ωh)⁴) (0.2 % at 2 kHz, h = 5e-5 s), equalises
 /// them. The force samples themselves are exact (z), and the force-rate term w·ġ is the
 /// fourth-order central difference D₁ of y.
-fn records(r: &mut RunResult, readouts: &[f64], residual: &[f64], no: usize, n_rail: usize, dt: f64) {
+fn records(
+    r: &mut RunResult,
+    readouts: &[f64],
+    residual: &[f64],
+    no: usize,
+    n_rail: usize,
+    dt: f64,
+) {
     let n = readouts.len() / (no * READOUTS).max(1);
     let e = |x: &[f64], s: usize| (14.0 * x[s + 2] - x[s + 1] - x[s + 3]) / 12.0;
     for j in 0..no {
         let rd = |k: usize, s: usize| readouts[(s * no + j) * READOUTS + k];
-        let rr = padded(n, |s| if j < n_rail { residual[s * n_rail + j] } else { 0.0 });
-        let (d, z, y) = (padded(n, |s| rd(0, s)), padded(n, |s| rd(2, s)), padded(n, |s| rd(3, s)));
+        let rr = padded(n, |s| {
+            if j < n_rail {
+                residual[s * n_rail + j]
+            } else {
+                0.0
+            }
+        });
+        let (d, y) = (padded(n, |s| rd(0, s)), padded(n, |s| rd(3, s)));
         let inner = padded(n, |s| {
-            rd(1, s) - z[s + 2] + (rr[s + 3] - 2.0 * rr[s + 2] + rr[s + 1]) / (dt * dt)
+            rd(1, s) + (rr[s + 3] - 2.0 * rr[s + 2] + rr[s + 1]) / (dt * dt)
         });
         for s in 0..n {
             r.disp[s * no + j] = e(&d, s) + rr[s + 2];
             let d1 = (y[s] - 8.0 * y[s + 1] + 8.0 * y[s + 3] - y[s + 4]) / (12.0 * dt);
-            r.acc[s * no + j] = e(&inner, s) + z[s + 2] + d1;
+            r.acc[s * no + j] = e(&inner, s) + rd(2, s) + d1;
         }
     }
 }
@@ -843,24 +1085,4 @@ fn damper_inverse(dampers: &[DamperLane], g_dd: &[f64]) -> (Vec<f64>, Option<Vtb
         )
     });
     (out, error)
-}
-
-/// Lane c failed: keep the error and zero its state so that it idles finite.
-fn fail<const W: usize>(
-    lane: &mut Lane,
-    c: usize,
-    q_free: &mut LVec<W>,
-    g: &mut LVec<W>,
-    p: &mut [f64],
-    cars: &mut [CarRun<W>],
-    e: VtbError,
-) {
-    lane.error = Some(e);
-    q_free.clear_lane(c);
-    g.clear_lane(c);
-    let nw = p.len() / W;
-    p[c * nw..(c + 1) * nw].fill(0.0);
-    for car in cars {
-        car.nm.clear_lane(c);
-    }
 }
