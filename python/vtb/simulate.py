@@ -351,8 +351,10 @@ def _reduction(config: Config):
     return reduction(config).to_core()
 
 
-#: The widest lockstep group by default (measured: ``cargo bench --bench lockstep``).
+#: The widest lockstep group by default (measured: ``cargo bench --bench lockstep``), and on a
+#: synthesis reduction (docs/synthesis.md).
 DEFAULT_LANES = _core.DEFAULT_LANES
+SYNTHESIS_LANES = _core.SYNTHESIS_LANES
 
 
 def simulate_batch(
@@ -361,14 +363,16 @@ def simulate_batch(
     progress: Union[bool, object] = False,
     on_error: str = "raise",
     histories: bool = False,
-    lanes: int = DEFAULT_LANES,
+    lanes: Optional[int] = None,
 ) -> list:
     """Runs many configurations in parallel in Rust and returns each run's metrics dict (or,
     with ``histories=True``, its full :class:`Result`).
 
     Configurations that differ only in their dampers' parameters (``tids.inertance``,
     ``stiffness``, ``damping``) or in their irregularity share one assembled model and run in
-    lockstep groups of up to ``lanes`` jobs (1, 2, 4 or 8; 1 runs every job alone): a job's
+    lockstep groups of up to ``lanes`` jobs (1, 2, 4 or 8; 1 runs every job alone; None: the
+    measured default of the engine, :data:`DEFAULT_LANES` or on a synthesis
+    :data:`SYNTHESIS_LANES`): a job's
     result is bit for bit the one it gives alone, a failing job leaves its group running, and
     without ``histories`` a job keeps only the series its metrics need.
 
@@ -380,7 +384,7 @@ def simulate_batch(
     """
     if on_error not in ("raise", "return"):
         raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
-    if not isinstance(lanes, int) or isinstance(lanes, bool) or lanes not in (1, 2, 4, 8):
+    if lanes is not None and (not isinstance(lanes, int) or isinstance(lanes, bool) or lanes not in (1, 2, 4, 8)):
         raise config_error("lanes", lanes, "must be 1, 2, 4 or 8")
     jsons, profile_index, profiles, keys = [], [], [], {}
     results: list = [None] * len(configs)
@@ -438,7 +442,8 @@ def simulate_batch(
     try:
         for red, members in groups.values():
             got = _core.batch([jsons[j] for j in members], profiles, [profile_index[j] for j in members], threads or 0,
-                              shifted if callback else None, histories, lanes, reduction=red)
+                              shifted if callback else None, histories,
+                              lanes or (SYNTHESIS_LANES if red is not None else DEFAULT_LANES), reduction=red)
             for j, r in zip(members, got):
                 out[j] = r
             offset += len(members)

@@ -70,6 +70,10 @@ pub(crate) const FINITE_POLL: usize = 1024;
 pub const MAX_LANES: usize = 8;
 /// The default widest group, chosen by measurement (`cargo bench --bench lockstep`, docs).
 pub const DEFAULT_LANES: usize = 4;
+/// The default widest group on a reduction: its lanes share the wheels' modal shapes, a
+/// pass over a few rows of ψ per wheel and step (measured, docs/synthesis.md: 8 lanes on 2
+/// cores run a TID sweep's cases 1.35× faster than 4).
+pub const SYNTHESIS_LANES: usize = 8;
 
 /// One job of a batch: a configuration and its (possibly shared) irregularity profile.
 #[derive(Clone, Debug)]

@@ -625,5 +625,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_plausible, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
+    m.add("SYNTHESIS_LANES", vtb::simulate::SYNTHESIS_LANES)?;
     Ok(())
 }
