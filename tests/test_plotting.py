@@ -1,8 +1,12 @@
-"""Figures: importing vtb.plotting leaves the user's matplotlib backend alone, and every
-figure function draws with labelled axes and writes vector and raster files."""
+"""Figures: importing vtb.plotting leaves the user's matplotlib backend alone; every figure
+kind of the package renders one journal column wide (85 mm) with units on its axes, no text
+overlapping other text or leaving the figure, traces told apart by line style, plain log tick
+labels and the unresolved bands shaded; each writes vector and raster files."""
 
+import itertools
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -11,12 +15,15 @@ import vtb
 from fuzz_cases import small_config
 
 pytest.importorskip("matplotlib")
+from matplotlib.text import Text  # noqa: E402
+
+from vtb import plotting  # noqa: E402
 
 
 def test_importing_plotting_keeps_the_users_backend(tmp_path):
     code = (
-        "import matplotlib; matplotlib.use('svg'); import vtb.plotting, vtb.reproduce; "
-        "import vtb.reproduce as r; f = r._plt().figure(); f.savefig(r'" + str(tmp_path / "x.svg") + "'); "
+        "import matplotlib; matplotlib.use('svg'); import vtb.plotting, vtb.reproduce, vtb.study; "
+        "import matplotlib.pyplot as plt; f = plt.figure(); f.savefig(r'" + str(tmp_path / "x.svg") + "'); "
         "print(matplotlib.get_backend())"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
@@ -31,39 +38,123 @@ def runs():
     return vtb.simulate(cfg), vtb.simulate(ctl)
 
 
-def test_figures_have_units_and_write_pdf_svg_png(runs, tmp_path):
-    from vtb import plotting
+def _texts(fig):
+    """Every text a drawn figure shows, with its extent (pixels): the tick labels matplotlib
+    draws (those within each axis' view) and every other visible, non-empty text."""
+    r = fig.canvas.get_renderer()
+    tick_labels, drawn = set(), []
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                tick_labels.update((id(tick.label1), id(tick.label2)))
+            for tick in axis._update_ticks():  # the ticks the axis draws
+                for label in (tick.label1, tick.label2):
+                    if label.get_visible() and label.get_text().strip():
+                        drawn.append(label)
+    others = [t for t in fig.findobj(Text) if id(t) not in tick_labels and t.get_visible() and t.get_text().strip()]
+    return [(t, t.get_window_extent(r)) for t in drawn + others]
 
-    figs = {
+
+def check_layout(fig, name):
+    """85 mm wide, text within the figure and never over other text, a unit on every y label,
+    clean tick labels on log axes."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    assert fig.get_figwidth() * 25.4 == pytest.approx(plotting.COLUMN_MM), name
+    texts = _texts(fig)
+    w, h = fig.canvas.get_width_height()
+    for t, b in texts:
+        assert b.x0 >= -1 and b.y0 >= -1 and b.x1 <= w + 1 and b.y1 <= h + 1, (name, t.get_text(), "leaves the figure")
+    for (t1, b1), (t2, b2) in itertools.combinations(texts, 2):
+        inter = b1.intersection(b1, b2)
+        if inter is not None and inter.width > 1 and inter.height > 1:
+            raise AssertionError(f"{name}: {t1.get_text()!r} overlaps {t2.get_text()!r}")
+    for ax in fig.axes:
+        if ax.has_data() and ax.get_ylabel():
+            assert "(" in ax.get_ylabel(), (name, ax.get_ylabel())  # a unit in brackets
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() == "log":
+                labels = [t.label1.get_text() for t in axis._update_ticks() if t.label1.get_text()]
+                # plain numbers, or decades alone (10⁻⁹): never a mantissa (3×10²)
+                assert labels and not any("times" in s for s in labels), (name, labels)
+
+
+def _sweep_table():
+    b = np.arange(1.0, 11.0)
+    return {"b_t": b, "rail_acc_max": 900 - 10 * b, "rail_acc_rms": 70 - b, "rail_acc_settle": 1.1 - 0.01 * b,
+            "slab_acc_max": 30 + b, "slab_acc_min": 29 + 0.5 * b}
+
+
+def _figures(runs):
+    """Every figure kind of the package, built from small inputs."""
+    f = np.geomspace(50, 5000, 60)
+    alpha = 1e-9 / (1 - (f / 1000) ** 2 + 0.1j * f / 1000)
+    base = dict(rail_acc_max=900.0, rail_acc_rms=70.0, rail_acc_settle=1.1, slab_acc_max=30.0)
+    gens = [SimpleNamespace(n_evals=8 * (i + 1), hypervolume=100.0 * (1 - 0.5 ** i)) for i in range(6)]
+    rng = np.random.default_rng(1)
+    designs = {"mean_rail_acc_max": 0.9 + 0.05 * rng.random(12), "mean_slab_acc_max": 1.0 + 0.1 * rng.random(12),
+               "sem_rail_acc_max": 0.01 * np.ones(12), "sem_slab_acc_max": 0.01 * np.ones(12)}
+    return {
         "histories": plotting.plot_histories(runs[0]),
-        "bands": plotting.plot_third_octave(runs, ["uncontrolled", "TIDs"], "rail"),
-        "receptance": plotting.plot_receptance([100, 300, 1000], [np.array([1e-9, 2e-9j, -1e-9])], ["point"], pinned_pinned=1000.0),
-        "decay": plotting.plot_decay_rate([100, 300, 1000], [np.array([5.0, 2.0, 1.0])], ["rail"]),
+        "comparison": plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], layers=("rail", "slab")),
+        "comparison car body": plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], layers=("car body",)),
+        "third octave": plotting.plot_third_octave(runs, ["uncontrolled", "TIDs"], ("rail", "slab")),
+        "receptance": plotting.plot_receptance(f, [alpha, 1.1 * alpha], ["a", "b"], pinned_pinned=1000.0, resolved=2000.0),
+        "decay rate": plotting.plot_decay_rate(f, [6.0 * (f / 100) ** -0.3, 5.0 * (f / 100) ** -0.2], ["a", "b"], resolved=2000.0),
+        "rail indices": plotting.plot_rail_indices(_sweep_table(), base),
+        "slab indices": plotting.plot_slab_indices(_sweep_table(), base),
+        "hypervolume": plotting.plot_hypervolume({"warm start": gens, "cold start": gens[::-1]}),
+        "pareto": plotting.plot_pareto(np.c_[850 + 50 * rng.random(40), 30 + 5 * rng.random(40)],
+                                       {"rail_acc_max": [840.0, 860.0], "slab_acc_max": [33.0, 31.0]}, base, (840.4, 41.5)),
+        "baselines": plotting.plot_baselines({(v, s): {"rail_acc_max": 500 + 10 * s + v} for v in (60, 70, 80, 90) for s in range(4)}),
+        "robust designs": plotting.plot_robust_designs(designs, {"mean_rail_acc_max": 0.91, "mean_slab_acc_max": 1.02}),
+        "held out": plotting.plot_held_out({"single": {"eta_rail_acc_max": [(0.07, 0.02)] * 4, "eta_slab_acc_max": [(-0.1, 0.02)] * 4},
+                                            "robust": {"eta_rail_acc_max": [(0.06, 0.02)] * 4, "eta_slab_acc_max": [(-0.05, 0.02)] * 4}},
+                                           [60, 70, 80, 90]),
     }
-    for name, fig in figs.items():
-        for ax in fig.axes:
-            if ax.has_data():
-                assert "(" in ax.get_ylabel(), (name, ax.get_ylabel())  # a unit in brackets
-        for suffix in ("png", "pdf", "svg"):
+
+
+def test_every_figure_kind_fits_a_journal_column(runs, tmp_path):
+    for name, fig in _figures(runs).items():
+        check_layout(fig, name)
+        for suffix in ("png", "pdf"):
             fig.savefig(tmp_path / f"{name}.{suffix}")
             assert (tmp_path / f"{name}.{suffix}").stat().st_size > 1000
-    labels = [t.get_text() for t in figs["receptance"].axes[0].get_legend().get_texts()]
-    assert "pinned–pinned $f_{pp}$" in labels  # reference lines have legend entries
 
 
-def test_comparison_figure_zooms_on_the_peak_and_labels_every_trace(runs, tmp_path):
-    from vtb import plotting
+def test_overlaid_traces_differ_in_style_and_the_reference_is_on_top(runs):
+    fig = plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], layers=("rail",))
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.get_lines() if ln.get_label() in ("uncontrolled", "TIDs")]
+    assert {ln.get_linestyle() for ln in lines} == {"-", "--"}
+    ref, other = lines
+    assert ref.get_zorder() > other.get_zorder()  # the uncontrolled trace is not hidden
 
-    fig = plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], path=tmp_path / "cmp.pdf", layers=("rail", "car body"))
-    assert (tmp_path / "cmp.pdf").stat().st_size > 1000
-    main = [ax for ax in fig.axes if ax.get_ylabel()]
-    assert len(main) == 4 and all("(" in ax.get_ylabel() for ax in main)
-    insets = [c for ax in main for c in ax.child_axes if c.get_title().startswith("zoom")]
-    assert len(insets) == 2  # one per acceleration panel
-    # the inset is centred on the first run's largest |acceleration|
+
+def test_the_zoom_panel_holds_the_first_runs_peak(runs):
+    fig = plotting.plot_comparison(runs, ["uncontrolled", "TIDs"], layers=("rail",), zoom=0.01)
+    zoom = fig.axes[2]
     t_peak = runs[0].t[np.argmax(np.abs(runs[0].acceleration("rail")))]
-    lo, hi = insets[0].get_xlim()
-    assert lo <= t_peak <= hi
-    # the two traces differ in line style, not only in colour
-    styles = {line.get_linestyle() for line in main[0].get_lines()}
-    assert len(styles) == 2
+    lo, hi = zoom.get_xlim()
+    assert lo <= t_peak <= hi and hi - lo <= 0.02 + 1e-12
+
+
+def test_band_levels_shade_what_the_model_does_not_resolve():
+    cfg = vtb.paper_config()  # the article's hybrid: the rail resolved to about 300 Hz
+    cfg.solver.t_end = 0.6
+    with pytest.warns(vtb.ResolutionWarning):
+        fig = plotting.plot_third_octave([vtb.simulate(cfg)], ["article"], ("rail",))
+    f_max = vtb.resolved_band(cfg).rail.f_max
+    ax = fig.axes[0]
+    spans = [p for p in ax.patches if p.get_label().startswith("not resolved")]
+    assert len(spans) == 1
+    assert spans[0].get_x() == pytest.approx(f_max) and ax.get_xlim()[0] < f_max
+
+
+def test_reference_lines_have_legend_entries():
+    f = np.geomspace(100, 3000, 20)
+    fig = plotting.plot_receptance(f, [1e-9 * np.ones(20)], ["point"], pinned_pinned=1000.0)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "pinned–pinned $f_{pp}$" in labels

@@ -46,20 +46,6 @@ ARTICLE_TABLE3_1 = dict(b_t=3.4464, k_t=1.1973e8, c_t=1750.5, rail_acc_max=840.4
 FIGURE_FORMATS = ("png", "pdf")
 
 
-def _plt():
-    # pyplot with the user's backend (matplotlib falls back to Agg without a display); every
-    # figure is closed once written
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _figure(**kw):
-    from matplotlib.figure import Figure
-
-    return Figure(layout="constrained", **kw)
-
-
 def _save(fig, out: Path, stem: str) -> str:
     """Writes ``fig`` as ``out/stem.png`` and ``.pdf``; returns the PNG's name."""
     for suffix in FIGURE_FORMATS:
@@ -74,35 +60,24 @@ def _write_csv(path: Path, rows: list) -> None:
         w.writerows(rows)
 
 
-def _histories_figure(a, b, labels, out: Path, stem: str, title: str, layers=("rail", "slab")) -> None:
+def _histories_figure(a, b, labels, out: Path, stem: str, layers=("rail", "slab")) -> None:
     from .plotting import plot_comparison
 
-    fig = plot_comparison([a, b], labels, layers=layers)
-    fig.suptitle(title)
-    _save(fig, out, stem)
+    _save(plot_comparison([a, b], labels, layers=layers), out, stem)
 
 
 def _bands_figure(results, labels, out: Path) -> list:
-    """Rail and slab one-third-octave levels of ``results`` side by side; returns the rows of
-    the band table (centre frequency, then one level per run and layer)."""
-    from .plotting import STYLES, power_of_ten
+    """Rail and slab one-third-octave levels of ``results``; returns the rows of the band table
+    (centre frequency, then one level per run and layer)."""
+    from .plotting import plot_third_octave
 
-    fig = _figure(figsize=(11, 3.8))
-    axes = fig.subplots(1, 2)
     rows = {}
-    for ax, layer in zip(axes, ("rail", "slab")):
-        for i, (r, lab) in enumerate(zip(results, labels)):
+    for layer in ("rail", "slab"):
+        for r, lab in zip(results, labels):
             b = r.third_octave(layer)
-            ax.stairs(b["level"], np.append(b["lower"], b["upper"][-1]), label=lab, linestyle=STYLES[i], lw=1.3, baseline=None)
             for c, lev in zip(b["nominal"], b["level"]):
                 rows.setdefault(float(c), {"band_Hz": float(c)})[f"{layer}_{lab.replace(' ', '_')}_dB"] = float(lev)
-        ax.set_xscale("log")
-        ax.set_xlabel("one-third-octave band $f_m$ (Hz)")
-        ax.set_ylabel(f"{layer} acceleration level $L_a$ (dB re {power_of_ten(b['reference'])} m/s²)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle("Frequency view: uncontrolled vs the chosen TID at the observation point")
-    _save(fig, out, "fig_third_octave")
+    _save(plot_third_octave(results, labels, ("rail", "slab")), out, "fig_third_octave")
     return [rows[k] for k in sorted(rows)]
 
 
@@ -152,7 +127,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     fem_cfg.discretisation.method = "fem"
     fem = simulate(fem_cfg)
     times["§3.3 hybrid + FEM runs"] = time.perf_counter() - t0
-    _histories_figure(hyb, fem, ("hybrid FE–SEA", "FEM, 251 elements"), out, "fig3_histories", "Fig. 3 analogue: no TID, mid-span")
+    _histories_figure(hyb, fem, ("hybrid FE–SEA", "FEM, 251 elements"), out, "fig3_histories")
     mh, mf = hyb.metrics(), fem.metrics()
     rows33 = []
     for k, (ah, af) in ARTICLE_33.items():
@@ -176,71 +151,31 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     t2 = sw.best_per_inertance()
     sweep_text = sweep_report(sw, out / "sweep.md", seconds=times["sweep"])
     _write_csv(out / "table2.csv", [{k: float(v[j]) for k, v in t2.items()} for j in range(len(t2["b_t"]))])
-    fig = _figure(figsize=(13, 3.6))
-    axes = fig.subplots(1, 3)
-    b0 = sw.baseline
-    for ax, key, sym, unit in zip(axes, ("rail_acc_max", "rail_acc_rms", "rail_acc_settle"), ("a_{rm}", "a_{r\\mathrm{RMS}}", "a_{rst}"), ("m/s²", "m/s²", "s")):
-        ax.plot(t2["b_t"], t2[key], "o-", label="best case per $b_t$")
-        ax.axhline(b0[key], color="k", ls="--", lw=0.8, label=f"uncontrolled ${sym}^0$")
-        ax.set_xlabel("inertance $b_t$ (kg)")
-        ax.set_ylabel(f"${sym}$ ({unit})")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle("Fig. 5 analogue: rail indices at the $a_{rm}$-optimal ($k_t$, $c_t$) per $b_t$")
-    _save(fig, out, "fig5_sweep_rail")
-    fig = _figure(figsize=(6, 3.6))
-    ax = fig.subplots()
-    ax.plot(t2["b_t"], t2["slab_acc_max"], "o-", label="$a_{sm}$ at the rail optimum")
-    ax.plot(t2["b_t"], t2["slab_acc_min"], "s--", label="minimum $a_{sm}$ per $b_t$")
-    ax.axhline(b0["slab_acc_max"], color="k", ls="--", lw=0.8, label="uncontrolled $a_{sm}^0$")
-    ax.set_xlabel("inertance $b_t$ (kg)")
-    ax.set_ylabel("slab acceleration amplitude $a_{sm}$ (m/s²)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Fig. 6 analogue: slab acceleration amplitude")
-    _save(fig, out, "fig6_sweep_slab")
+    from . import plotting
+
+    _save(plotting.plot_rail_indices(t2, sw.baseline), out, "fig5_sweep_rail")
+    _save(plotting.plot_slab_indices(t2, sw.baseline), out, "fig6_sweep_slab")
 
     # §4.4: the optimisation (Fig. 7, Table 3, Fig. 8, car body, frequency view).
     runs = optimisations(cfg, sw, out, plan, seed, optimiser, progress)
     for label, (_, seconds) in runs.items():
         times[f"optimisation ({label})"] = seconds
     opt = runs["warm" if "warm" in runs else "cold"][0]
-    fig = _figure(figsize=(6, 3.6))
-    ax = fig.subplots()
-    for i, (label, (res, _)) in enumerate(runs.items()):
-        h = res.moga.history
-        ax.plot([g.n_evals for g in h], [g.hypervolume for g in h], ".-" if i == 0 else "x--", ms=3, label=f"{label} start ({res.moga.n_evals} evaluations)")
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("hypervolume $H$ ((m/s²)²)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Feasible front's hypervolume, reference ($a_{rm}^0$, $a_{sm}^0$)")
-    _save(fig, out, "fig_hypervolume")
+    histories = {f"{label} start ({res.moga.n_evals} evaluations)": res.moga.history for label, (res, _) in runs.items()}
+    _save(plotting.plot_hypervolume(histories), out, "fig_hypervolume")
     table3 = opt.table() if len(opt) else []
     if table3:
         _write_csv(out / "table3.csv", table3)
-    pop = opt.moga.pop
-    fig = _figure(figsize=(6, 4))
-    ax = fig.subplots()
-    ax.scatter(pop.F[:, 0], pop.F[:, 1], s=8, c="0.7", label="final population")
-    ax.plot(opt.pareto["rail_acc_max"], opt.pareto["slab_acc_max"], "o", ms=4, label="Pareto set")
-    ax.plot([ARTICLE_TABLE3_1["rail_acc_max"]], [ARTICLE_TABLE3_1["slab_acc_max"]], "r*", ms=10, label="article, solution 1")
-    ax.axvline(opt.baseline["rail_acc_max"], color="k", ls="--", lw=0.8, label="uncontrolled $a_{rm}^0$")
-    ax.axhline(opt.baseline["slab_acc_max"], color="k", ls=":", lw=0.8, label="uncontrolled $a_{sm}^0$")
-    ax.set_xlabel("rail acceleration amplitude $a_{rm}$ (m/s²)")
-    ax.set_ylabel("slab acceleration amplitude $a_{sm}$ (m/s²)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Fig. 7 analogue: Pareto front")
-    _save(fig, out, "fig7_pareto")
+    reference = (ARTICLE_TABLE3_1["rail_acc_max"], ARTICLE_TABLE3_1["slab_acc_max"])
+    _save(plotting.plot_pareto(opt.moga.pop.F, opt.pareto, opt.baseline, reference), out, "fig7_pareto")
     car, bands, chosen = {}, [], None
     if len(opt):
         t0 = time.perf_counter()
         unc, ctl = opt.histories()
         chosen = opt.chosen("best η_r")
         times["chosen solution's histories"] = time.perf_counter() - t0
-        _histories_figure(unc, ctl, ("uncontrolled", "chosen TID"), out, "fig8_histories", "Fig. 8 analogue: uncontrolled vs the chosen TID")
-        _histories_figure(unc, ctl, ("uncontrolled", "chosen TID"), out, "fig_car_body", "Car body: uncontrolled vs the chosen TID", layers=("car body",))
+        _histories_figure(unc, ctl, ("uncontrolled", "chosen TID"), out, "fig8_histories")
+        _histories_figure(unc, ctl, ("uncontrolled", "chosen TID"), out, "fig_car_body", layers=("car body",))
         bands = _bands_figure([unc, ctl], ["uncontrolled", "chosen TID"], out)
         _write_csv(out / "third_octave.csv", bands)
         mu, mc = unc.metrics(), ctl.metrics()

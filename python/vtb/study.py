@@ -4,18 +4,19 @@ It re-examines the article's chain where it can be trusted and over the excitati
 cannot know in advance:
 
 1. **the article's chain** on the article's model at the calibrated level (:func:`vtb.reproduce.run`);
-2. **the same chain on the converged preset**, at the calibrated level and at a level without
-   wheel–rail contact loss (the largest of :data:`LEVEL_FACTORS` × the calibrated scale at
-   which the uncontrolled design-speed run keeps every wheel on the rail);
-3. **a robust optimisation** on the converged preset at that level, over irregularity samples
-   (the design seeds) and speeds: the optimal design per speed and one for all speeds;
+2. **the same chain on the fast converged model** (``paper_config(model="fast")``: the
+   converged preset by complex-modal synthesis, docs/synthesis.md), at the calibrated level and
+   at a level without wheel–rail contact loss (the largest of :data:`LEVEL_FACTORS` × the
+   calibrated scale at which the uncontrolled design-speed run keeps every wheel on the rail);
+3. **a robust optimisation** on the fast converged model at that level, over irregularity
+   samples (the design seeds) and speeds: the optimal design per speed and one for all speeds;
 4. **the single-sample optimum and the robust optimum on held-out samples** at every speed;
 5. **verdicts** on the article's five conclusions, each with the numbers behind it.
 
 Every stage keeps its journal or checkpoint in ``DIR``, so an interrupted study resumes. The
 budgets (:data:`PLANS`) are written into the report. ``quick`` runs the same stages on a short
-record of the converged model (the wheels passing an observation point near their start) with
-tiny budgets, to show the pipeline in about a minute; its numbers are not findings.
+record of the fast model (the wheels passing an observation point near their start) with tiny
+budgets, to show the pipeline in about a minute; its numbers are not findings.
 """
 
 from __future__ import annotations
@@ -52,8 +53,8 @@ LEVEL_FACTORS = (1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 6)
 PLANS = {
     "full": dict(
         article=dict(quick=False, pop_size=100, n_gen=5),
-        grid=dict(b_t=(3.0, 6.0), f=(0.8, 1.0, 1.2), c_t=(1e3,)), moga=(6, 2),
-        robust_grid=dict(b_t=(5.0,), f=(0.8, 1.0, 1.2), c_t=(1e3,)), robust_moga=(3, 2),
+        grid=dict(b_t=(2.0, 3.0, 5.0, 8.0), f=(0.8, 0.9, 1.0, 1.1, 1.2), c_t=(1e2, 1e3)), moga=(20, 5),
+        robust_grid=dict(b_t=(3.0, 5.0), f=(0.9, 1.0, 1.1), c_t=(1e3,)), robust_moga=(20, 15),
         samples=8, speeds=(60.0, 70.0, 80.0, 90.0), held_out=8, statistic="mean",
         record=None,
     ),
@@ -77,9 +78,9 @@ CONCLUSIONS = (
 
 
 def _converged(plan: dict, scale_factor: float):
-    """The converged preset at ``scale_factor`` × the calibrated level, dampers around the
+    """The fast converged model at ``scale_factor`` × the calibrated level, dampers around the
     observation point (quick: the short record of :data:`PLANS`)."""
-    cfg = paper_config(calibrated=True, model="converged")
+    cfg = paper_config(calibrated=True, model="fast")
     cfg.irregularity.scale *= scale_factor
     if plan["record"] is not None:
         cfg.output.points = [plan["record"]["point"]]
@@ -164,7 +165,7 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
     article = json.loads((out / "article" / "summary.json").read_text())
     times["1. article chain (article model)"] = time.perf_counter() - t0
 
-    # 2. The converged preset at the calibrated level and without contact loss.
+    # 2. The fast converged model at the calibrated level and without contact loss.
     t0 = time.perf_counter()
     factor, levels = no_loss_level(plan, progress, out / "levels.json")
     reproduce._write_csv(out / "levels.csv", levels)
@@ -277,7 +278,7 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
     out.append((CONCLUSIONS[1], "holds" if all(close) else "holds on the article's model and sample only" if close[0] else
                 "holds under stated conditions" if any(close) else "does not hold",
                 f"best a_rm cut (within ±5 points of {100 * ARTICLE_BEST_RAIL_CUT:.0f} % counts as holding): article model, sample {PAPER_SEED}: {100 * art_cut:.1f} %; "
-                f"converged preset, same sample, the study's grid: {100 * conv_cuts[0]:.1f} % (calibrated level), {100 * conv_cuts[1]:.1f} % (no-contact-loss level); "
+                f"fast converged model, same sample, the study's grid: {100 * conv_cuts[0]:.1f} % (calibrated level), {100 * conv_cuts[1]:.1f} % (no-contact-loss level); "
                 f"held-out samples at {', '.join(f'{v:g}' for v in speeds)} m/s (mean ± standard error): "
                 + "; ".join(f"{k} {_pm(v)}" for k, v in held_best.items()) + "."))
 
@@ -312,9 +313,9 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
     if ch:
         parts.append(f"article model, MOGA choice (best η_r): ({100 * got[0][0]:.1f} %, {100 * got[0][1]:.1f} %, {100 * got[0][2]:.2f} %)")
     if conv:
-        parts.append(f"converged preset, no-loss level: ({100 * conv['eta_rail_acc_max']:.1f} %, {100 * conv['eta_slab_acc_max']:.1f} %, {100 * conv['eta_car_acc_max']:.2f} %)")
+        parts.append(f"fast converged model, no-loss level: ({100 * conv['eta_rail_acc_max']:.1f} %, {100 * conv['eta_slab_acc_max']:.1f} %, {100 * conv['eta_car_acc_max']:.2f} %)")
     else:
-        parts.append("converged preset, no-loss level: the optimisation found no design meeting the constraints")
+        parts.append("fast converged model, no-loss level: the optimisation found no design meeting the constraints")
     out.append((CONCLUSIONS[4], "holds" if ok and all(ok) else "holds under stated conditions" if any(ok) else "does not hold",
                 f"(rail, slab, car body) cuts against the article's ({', '.join(f'{100 * t:.1f} %' for t in target)}), within ±5 points counts as holding: "
                 + "; ".join(parts) + "."))
@@ -322,48 +323,16 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
 
 
 def _figures(out: Path, ropt, designs, held, speeds) -> None:
-    plt = reproduce._plt()
-    # Uncontrolled rail peak of every design case: the spread a design has to hold over.
-    fig = reproduce._figure(figsize=(6, 3.6))
-    ax = fig.subplots()
-    for (v, s), b in ropt.baseline.items():
-        ax.plot(v, b["rail_acc_max"], "o", color="C0", ms=4, alpha=0.7)
-    ax.set_xlabel("speed $v$ (m/s)")
-    ax.set_ylabel("uncontrolled $a_{rm}^0$ (m/s²)")
-    ax.set_title("Uncontrolled rail peak of each design sample")
-    ax.grid(True, alpha=0.3)
-    reproduce._save(fig, out, "fig_baselines")
+    from . import plotting
+
+    # The uncontrolled rail peak of every design case: the spread a design has to hold over.
+    reproduce._save(plotting.plot_baselines(ropt.baseline), out, "fig_baselines")
     # Every evaluated design: mean ratios with their standard errors, the chosen one marked.
-    t = ropt.evaluated_table()
-    fig = reproduce._figure(figsize=(6, 4))
-    ax = fig.subplots()
-    ax.errorbar(t["mean_rail_acc_max"], t["mean_slab_acc_max"], xerr=t["sem_rail_acc_max"], yerr=t["sem_slab_acc_max"], fmt="o", ms=4,
-                color="0.5", label="evaluated designs (mean ± s.e.)")
-    d = designs["all speeds"]
-    ax.plot([d["mean_rail_acc_max"]], [d["mean_slab_acc_max"]], "r*", ms=12, label="robust optimum (all speeds)")
-    ax.axvline(1.0, color="k", ls="--", lw=0.8, label="uncontrolled")
-    ax.axhline(1.0, color="k", ls=":", lw=0.8)
-    ax.set_xlabel("$a_{rm}/a_{rm}^0$ over the cases")
-    ax.set_ylabel("$a_{sm}/a_{sm}^0$ over the cases")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Designs over samples and speeds")
-    reproduce._save(fig, out, "fig_robust_designs")
+    reproduce._save(plotting.plot_robust_designs(ropt.evaluated_table(), designs["all speeds"]), out, "fig_robust_designs")
     # Held-out: reduction rates per speed, mean ± s.e.
-    fig = reproduce._figure(figsize=(11, 3.6))
-    axes = fig.subplots(1, 2)
-    for ax, key, sym in zip(axes, ("eta_rail_acc_max", "eta_slab_acc_max"), ("a_{rm}", "a_{sm}")):
-        for j, (label, ev) in enumerate(held.items()):
-            ms = np.array([_mean_sem(ev, key, v) for v in speeds])
-            ax.errorbar(np.array(speeds) + (j - 0.5) * 1.2, 100 * ms[:, 0], yerr=100 * ms[:, 1], fmt="o-" if j == 0 else "s--", ms=4, capsize=3, label=label)
-        ax.axhline(0.0, color="k", lw=0.8)
-        ax.set_xlabel("speed $v$ (m/s)")
-        ax.set_ylabel(f"reduction $\\eta_{{{sym}}}$ (%)")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle("Held-out samples: reduction rate per speed (mean ± standard error)")
-    reproduce._save(fig, out, "fig_held_out")
-    plt.close("all")
+    series = {label: {key: [_mean_sem(ev, key, v) for v in speeds] for key in ("eta_rail_acc_max", "eta_slab_acc_max")}
+              for label, ev in held.items()}
+    reproduce._save(plotting.plot_held_out(series, speeds), out, "fig_held_out")
 
 
 def _smooth_text(levels: list) -> list:
@@ -374,7 +343,7 @@ def _smooth_text(levels: list) -> list:
         return []
     band = paper_config(model="converged").output.band_limit
     return [
-        f"On a smooth rail the converged model's uncontrolled rail peak is {smooth['rail_acc_max']:.0f} m/s², "
+        f"On a smooth rail the fast converged model's uncontrolled rail peak is {smooth['rail_acc_max']:.0f} m/s², "
         f"{100 * smooth['rail_acc_max'] / full['rail_acc_max']:.0f} % of its value at the calibrated level (the slab: "
         f"{100 * smooth['slab_acc_max'] / full['slab_acc_max']:.0f} %). On the converged model a_rm is the rail peak low-passed at "
         f"{band:g} Hz with the wheels on their Hertz contact patches (`output.band_limit`, `contact_patch`): the raw peak of a point "
@@ -394,7 +363,7 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         f"{times['total'] / 60:.1f} min in all"
         + (f" (the stage times are the first invocation's, times.json; this one resumed from its journals and took {this_total / 60:.1f} min)" if abs(this_total - times["total"]) > 1e-9 else "")
         + "." + (
-            " **Quick study**: the converged model on a short record (observation point "
+            " **Quick study**: the fast converged model on a short record (observation point "
             f"{plan['record']['point']:g} m, {plan['record']['t_end']:g} s) with tiny budgets; the numbers show the pipeline, not findings." if quick else ""),
         "",
         "## Budgets and run times",
@@ -417,9 +386,13 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         f"Best sweep case: b_t = {article['sweep_best']['b_t']:g} kg, k_t = {article['sweep_best']['k_t']:.3g} N/m, c_t = {article['sweep_best']['c_t']:g} N·s/m, "
         f"a_rm cut {100 * article['sweep_best']['eta_rail_acc_max']:.2f} % (article {100 * ARTICLE_BEST_RAIL_CUT:.2f} %). The full comparison is in the chain's own report.",
         "",
-        "## 2. The converged preset at two levels",
+        "## 2. The fast converged model at two levels",
         "",
-        f"Levels tried (converged, uncontrolled, 80 m/s, sample {PAPER_SEED}; `levels.csv`):",
+        "The converged preset (Timoshenko rail at 20 elements per fastener bay, Hertz contact patches, indices low-passed at "
+        f"{paper_config(model='fast').output.band_limit:g} Hz) run by complex-modal synthesis (`paper_config(model=\"fast\")`, "
+        "docs/synthesis.md; verified against the converged finite elements in docs/synthesis-verification.md).",
+        "",
+        f"Levels tried (fast converged model, uncontrolled, 80 m/s, sample {PAPER_SEED}; `levels.csv`):",
         "",
         "| factor × calibrated | scale | a_rm0 (m/s²) | a_sm0 (m/s²) | min contact force (N) | contact-loss events |",
         "|---|---|---|---|---|---|",
@@ -445,7 +418,7 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         "",
         f"Pinned–pinned frequency of the converged (Timoshenko) rail: {chains['no_loss']['pinned_pinned_frequency']:.0f} Hz.",
         "",
-        "## 3. Robust optimisation (converged preset, no-contact-loss level)",
+        "## 3. Robust optimisation (fast converged model, no-contact-loss level)",
         "",
         f"The uncontrolled rail peak over the {n_cases} design cases ranges {b0.min():.0f}–{b0.max():.0f} m/s² (mean {b0.mean():.0f}); "
         f"{loss} of them lose contact (`robust_baselines.csv`, fig_baselines). Every evaluated design with its statistics is in `robust_designs.csv`.",
