@@ -300,8 +300,8 @@ def _frequency_text(bands: list) -> list:
     """The report's frequency view: where in the spectrum the chosen TID acts."""
     f = np.array([r["band_Hz"] for r in bands])
     L = ["## Frequency view: one-third-octave levels, uncontrolled vs the chosen TID (fig_third_octave.png, third_octave.csv)", "",
-         "IEC 61260-1 base-10 bands of the acceleration at the observation point over the whole run, in dB re 1e-6 m/s² "
-         "(Welch PSD, docs/spectra.md).", "",
+         "IEC 61260-1 base-10 bands of the acceleration at the observation point over the whole run, in dB re 1e-6 m/s²: "
+         "energy-true levels of the passage (the record's periodogram, whose band powers sum to its mean square; docs/spectra.md).", "",
          "| layer | strongest band, uncontrolled | its level (dB) | largest cut by the TID | largest rise by the TID | overall level change (dB) |",
          "|---|---|---|---|---|---|"]
     for layer in ("rail", "slab"):

@@ -240,16 +240,29 @@ class Result:
         return psd(x, 1.0 / self.config.solver.dt, nperseg)
 
     def third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
-        """IEC 61260-1 one-third-octave band levels of :meth:`series`, in dB re 1e−6 m/s²
-        (acceleration) or 1e−9 m (displacement); see :func:`vtb.spectra.third_octave`. Bands
+        """Energy-true IEC 61260-1 one-third-octave band levels of :meth:`series` over the
+        analysis ``window`` (s; the whole run by default), in dB re 1e−6 m/s² (acceleration) or
+        1e−9 m (displacement), with the equivalent level ``leq`` and the exposure level
+        ``exposure`` (dB) over it; see :func:`vtb.spectra.third_octave`. A passage is a
+        transient, so these (not Welch's, :meth:`welch_third_octave`) are its band levels. Bands
         beyond the band the run resolves for the layer (:func:`vtb.resolved_band`) warn
         (:class:`vtb.ResolutionWarning`)."""
         from .spectra import third_octave
 
+        return self._bands(third_octave, layer, quantity, point, window, **options)
+
+    def welch_third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
+        """One-third-octave band levels of :meth:`series` by Welch's PSD, for a stationary part
+        of a run (:func:`vtb.spectra.welch_third_octave`); warns as :meth:`third_octave`."""
+        from .spectra import welch_third_octave
+
+        return self._bands(welch_third_octave, layer, quantity, point, window, **options)
+
+    def _bands(self, method, layer: str, quantity: str, point: int, window, **options) -> dict:
         from .resolution import warn_beyond
 
         t, x = self.series(layer, quantity, point, window)
-        bands = third_octave(x, 1.0 / self.config.solver.dt, quantity, **options)
+        bands = method(x, 1.0 / self.config.solver.dt, quantity, **options)
         if len(bands["upper"]):
             warn_beyond(self.config, layer, float(bands["upper"][-1]), "the top band", stepped=True)
         return bands

@@ -1,20 +1,23 @@
 """Spectra and one-third-octave band levels of a sampled signal (docs/spectra.md).
 
-* :func:`psd`: one-sided power spectral density by Welch's method — Hann window, segments of
-  ``nperseg`` samples overlapping by half, each segment's mean removed, density scaling — so
-  that the integral of the PSD over frequency is the signal's variance (units: signal² / Hz,
-  e.g. (m/s²)²/Hz).
+* :func:`third_octave`: the **energy-true** IEC 61260-1 base-10 one-third-octave levels of a
+  record taken whole (a passage, a transient): the band powers of its periodogram over the
+  analysis window, which sum with the power below and above the bands to the record's mean
+  square (Parseval, exactly); with the equivalent level L_eq over the window and the exposure
+  level L_E (re 1 s).
+* :func:`psd` and :func:`welch_third_octave`: Welch's estimator for **stationary** records —
+  Hann window, segments of ``nperseg`` samples overlapping by half, each segment's mean
+  removed, density scaling — so that the PSD integrates to the variance (units: signal²/Hz);
+  its band powers integrate the PSD over each band. On a transient the segments' window
+  weights an event by where it falls, so its levels are not the record's energy.
 * :func:`low_pass`: the core's zero-phase low-pass of the band-limited indices
   (``output.band_limit``): an 8th-order Butterworth run forwards and backwards, gain
   1/(1 + (f/f_b)¹⁶), −6 dB at the band limit f_b (docs/model.md §8).
-* :func:`third_octave`: IEC 61260-1 base-10 one-third-octave bands. Exact midband frequencies
-  f_m = 1000 Hz · 10^(x/10), band edges f_m · 10^(∓1/20); the band power is the PSD integrated
-  over the band (trapezoidal rule on the PSD interpolated linearly between bins, edges
-  included), its level 10·log10(power / ref²) dB. Standard references: 1e−6 m/s² for
-  acceleration, 1e−9 m for displacement (:data:`REFERENCE`).
 
-Only bands whose lower edge is at least :data:`MIN_BINS_PER_BAND` frequency bins of the
-Welch resolution wide are reported by default: narrower bands hold too few bins for a level.
+Bands: exact midband frequencies f_m = 1000 Hz · 10^(x/10), edges f_m · 10^(∓1/20), levels
+10·log10(power / ref²) dB against the standard references 1e−6 m/s² for acceleration, 1e−9 m
+for displacement (:data:`REFERENCE`). Only bands at least :data:`MIN_BINS_PER_BAND` frequency
+bins wide are reported by default: narrower bands hold too few bins for a level.
 """
 
 from __future__ import annotations
@@ -107,30 +110,69 @@ def band_power(f: np.ndarray, p: np.ndarray, f1: float, f2: float) -> float:
     return float(np.trapezoid(pp, ff) if hasattr(np, "trapezoid") else np.trapz(pp, ff))
 
 
-def third_octave(x, fs: float, quantity: str = "acc", nperseg: Optional[int] = None, f_min: Optional[float] = None, f_max: Optional[float] = None) -> dict:
-    """One-third-octave band levels of ``x`` (module docstring). ``quantity``: ``"acc"``,
-    ``"vel"`` or ``"disp"`` picks the reference (:data:`REFERENCE`); ``f_min``/``f_max`` (Hz)
-    limit the bands (default: from the first band at least :data:`MIN_BINS_PER_BAND` bins wide
-    to the last one below the Nyquist frequency).
-
-    Returns numpy columns ``centre`` (exact midband, Hz), ``nominal`` (Hz), ``lower`` and
-    ``upper`` (band edges, Hz), ``power`` (units²) and ``level`` (dB re the reference), and
-    ``reference``.
-    """
+def _bands(df: float, f_top: float, quantity: str, f_min: Optional[float], f_max: Optional[float]) -> tuple:
+    """The bands for bins of width ``df`` up to ``f_top`` (module docstring): (centre, lower,
+    upper, reference)."""
     if quantity not in REFERENCE:
         raise config_error("quantity", quantity, f"must be one of {sorted(REFERENCE)}")
-    f, p = psd(x, fs, nperseg)
-    df = f[1] - f[0]
     half_width = 10.0 ** (1 / 20) - 10.0 ** (-1 / 20)  # band width / midband
-    lo = max(MIN_BINS_PER_BAND * df / half_width * 10.0 ** (-1 / 20), f[1]) if f_min is None else f_min
-    hi = f[-1] if f_max is None else min(f_max, f[-1])
+    lo = max(MIN_BINS_PER_BAND * df / half_width * 10.0 ** (-1 / 20), df) if f_min is None else f_min
+    hi = f_top if f_max is None else min(f_max, f_top)
     x_idx = band_centres(lo, hi)
     if x_idx.size == 0:
         raise config_error("f_min", lo, f"no whole one-third-octave band fits in [{lo:g}, {hi:g}] Hz: use a longer record or a wider range")
     centre = 1000.0 * 10.0 ** (x_idx / 10.0)
-    lower, upper = centre * 10.0 ** (-1 / 20), centre * 10.0 ** (1 / 20)
-    power = np.array([band_power(f, p, a, b) for a, b in zip(lower, upper)])
-    ref = REFERENCE[quantity]
+    return centre, centre * 10.0 ** (-1 / 20), centre * 10.0 ** (1 / 20), REFERENCE[quantity]
+
+
+def _levels(centre, lower, upper, power, ref, **extra) -> dict:
     with np.errstate(divide="ignore"):
         level = 10.0 * np.log10(power / ref**2)
-    return dict(centre=centre, nominal=np.array([nominal_frequency(c) for c in centre]), lower=lower, upper=upper, power=power, level=level, reference=ref)
+    return dict(centre=centre, nominal=np.array([nominal_frequency(c) for c in centre]), lower=lower, upper=upper, power=power,
+                level=level, reference=ref, **extra)
+
+
+def third_octave(x, fs: float, quantity: str = "acc", f_min: Optional[float] = None, f_max: Optional[float] = None) -> dict:
+    """Energy-true one-third-octave band levels of the record ``x`` taken whole (module
+    docstring): the one-sided periodogram of the record (no window, no averaging) puts each
+    frequency bin's power — |X_k|²/N², doubled but for 0 and the Nyquist frequency — wholly in
+    the band holding its frequency, so that the band powers, ``below`` (the bins under the
+    first band, the mean included) and ``above`` sum to the mean square. ``quantity``:
+    ``"acc"``, ``"vel"`` or ``"disp"`` picks the reference (:data:`REFERENCE`); ``f_min``,
+    ``f_max`` (Hz) limit the bands (default: from the first band at least
+    :data:`MIN_BINS_PER_BAND` bins of 1/T wide to the last one below the Nyquist frequency).
+
+    Returns numpy columns ``centre`` (exact midband, Hz), ``nominal`` (Hz), ``lower`` and
+    ``upper`` (band edges, Hz), ``power`` (units², each band's share of the mean square) and
+    ``level`` (dB re the reference); ``reference``; ``mean_square`` (units²), ``below`` and
+    ``above`` (units²); ``duration`` T (s); ``leq``, the equivalent level 10·log10(mean square /
+    ref²) over T, and ``exposure``, L_E = L_eq + 10·log10(T / 1 s) (dB).
+    """
+    x = _signal(x)
+    fs = _rate(fs)
+    n = x.size
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    p = np.abs(np.fft.rfft(x)) ** 2 / n**2
+    p[1:n // 2 + (n % 2)] *= 2.0  # the one-sided spectrum; 0 Hz and an even record's Nyquist bin once
+    centre, lower, upper, ref = _bands(f[1], f[-1], quantity, f_min, f_max)
+    # Each bin wholly in the band [lower, upper) holding its frequency (the bands touch).
+    index = np.searchsorted(np.append(lower, upper[-1]), f, side="right") - 1
+    inside = (index >= 0) & (index < centre.size)
+    power = np.bincount(index[inside], weights=p[inside], minlength=centre.size)
+    mean_square = float(np.mean(x**2))
+    duration = n / fs
+    with np.errstate(divide="ignore"):
+        leq = 10.0 * math.log10(mean_square / ref**2) if mean_square > 0 else -math.inf
+    return _levels(centre, lower, upper, power, ref, mean_square=mean_square, below=float(p[f < lower[0]].sum()),
+                   above=float(p[f >= upper[-1]].sum()), duration=duration, leq=leq, exposure=leq + 10.0 * math.log10(duration))
+
+
+def welch_third_octave(x, fs: float, quantity: str = "acc", nperseg: Optional[int] = None, f_min: Optional[float] = None,
+                       f_max: Optional[float] = None) -> dict:
+    """One-third-octave band levels of a **stationary** record by Welch's PSD (module
+    docstring): each band's power is the PSD integrated over it. Arguments and columns as
+    :func:`third_octave` (without its energy totals); the bins are Welch's (``nperseg``)."""
+    f, p = psd(x, fs, nperseg)
+    centre, lower, upper, ref = _bands(f[1] - f[0], f[-1], quantity, f_min, f_max)
+    power = np.array([band_power(f, p, a, b) for a, b in zip(lower, upper)])
+    return _levels(centre, lower, upper, power, ref)
