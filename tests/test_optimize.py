@@ -104,27 +104,59 @@ def _batch_calls(monkeypatch, kill_at=None):
 
 
 def test_killed_optimisation_resumes_to_the_uninterrupted_result(short, result, tmp_path, monkeypatch):
-    """Killed while evaluating generation 3, resumed from the checkpoint of generation 2: the
+    """Killed before evaluating generation 3, resumed from the checkpoint of generation 2: the
     Pareto set (metrics included) and the history are those of the uninterrupted run. Called
-    again, the finished checkpoint gives the same result with an empty evaluation cache: only
-    the front's runs are redone, for its metrics."""
+    again, the finished checkpoint and its designs journal give the same result without a run."""
     ck = tmp_path / "opt.npz"
     calls = _batch_calls(monkeypatch, kill_at=3)
     with pytest.raises(Killed):
         vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
     calls = _batch_calls(monkeypatch)
     resumed = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
-    assert calls[0] == 8 and len(calls) <= 2  # generation 3, then any front point found before the kill
+    assert 0 < calls[0] <= 8 and len(calls) == 1  # generation 3's designs not seen before
     _same_optimisation(result, resumed)
     calls.clear()
     again = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
-    assert calls == [len(result)]
+    assert calls == []
     _same_optimisation(result, again)
     other = short.copy()
     other.speed = 70.0
-    with pytest.raises(vtb.ConfigError, match="problem") as e:
+    with pytest.raises(vtb.ConfigError, match="another optimisation") as e:  # its designs journal refuses first
         vtb.optimize(other, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
     assert e.value.field == "checkpoint"
+
+
+def test_a_generation_killed_mid_batch_keeps_its_finished_designs(short, result, tmp_path, monkeypatch):
+    """Killed inside generation 2's batch once three of its designs have finished: those three
+    are in the designs journal, and the resumed run evaluates only the others."""
+    ck = tmp_path / "opt.npz"
+    journal = tmp_path / "opt.npz.designs.jsonl"
+    real = OPT.simulate_batch
+    state = dict(batch=0)
+
+    def killing(configs, **kw):
+        state["batch"] += 1
+        if state["batch"] == 2:
+            seen = []
+
+            def on_result(i, r, _inner=kw["on_result"]):
+                _inner(i, r)
+                seen.append(i)
+                if len(seen) == 3:
+                    raise Killed
+
+            kw = dict(kw, on_result=on_result, threads=1)
+        return real(configs, **kw)
+
+    monkeypatch.setattr(OPT, "simulate_batch", killing)
+    with pytest.raises(Killed):
+        vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    designs_before = len(journal.read_text().splitlines()) - 1  # the identity line
+    assert designs_before >= 8 + 3  # generation 1, and three of generation 2
+    calls = _batch_calls(monkeypatch)
+    resumed = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    assert calls[0] <= 8 - 3
+    _same_optimisation(result, resumed)
 
 
 def test_hypervolume_reference_is_the_uncontrolled_point(result):

@@ -66,35 +66,44 @@ def test_dask_cluster_gives_identical_results(short, reference):
             _same(reference, vtb.sweep(short, **GRID, executor=client.get_executor(), chunk=2, progress=False))
 
 
-def test_killed_sweep_resumes_without_recomputing(short, reference, tmp_path, monkeypatch):
-    out = tmp_path / "sweep.csv"
+def interrupted_then_resumed(config, grid, out, monkeypatch):
+    """A sweep killed (Ctrl-C) after its first lockstep group is journaled, then resumed: the
+    cases journaled before the kill, the runs of every later batch call (a list the caller
+    may clear) and the resumed result."""
     ran = []
-    real = sweep_mod._run_chunk
+    real = sweep_mod.simulate_batch
 
-    def counting(config, cases, threads):
-        ran.extend(c[0] for c in cases)
-        return real(config, cases, threads)
+    def counting(configs, **kw):
+        ran.append(len(configs))
+        return real(configs, **kw)
 
-    monkeypatch.setattr(sweep_mod, "_run_chunk", counting)
+    monkeypatch.setattr(sweep_mod, "simulate_batch", counting)
 
     def kill(done, total):
-        if done >= 2:
-            raise KeyboardInterrupt
+        assert 0 < done < total, "a kill mid-way needs more than one lockstep group"
+        raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        vtb.sweep(short, **GRID, out=out, chunk=2, progress=kill)
-    first = list(ran)
-    assert first == [0, 1]
-    # A line cut short by the kill is ignored.
+        vtb.sweep(config, **grid, out=out, progress=kill, threads=1)
+    rows = [line for line in Path(out).read_text().splitlines()[2:] if line.strip()]
+    ran.clear()
+    resumed = vtb.sweep(config, **grid, out=out, progress=False, threads=1)
+    return len(rows), ran, resumed
+
+
+def test_killed_sweep_resumes_without_recomputing(short, reference, tmp_path, monkeypatch):
+    out = tmp_path / "sweep.csv"
+    n_cases = len(reference)
+    journaled, ran, resumed = interrupted_then_resumed(short, GRID, out, monkeypatch)
+    assert 0 < journaled < n_cases
+    assert sum(ran) == n_cases - journaled  # nothing finished runs again
+    _same(reference, resumed)  # bit for bit
+    # A line cut short by a kill is ignored, and a finished sweep runs nothing.
     with open(out, "a") as f:
         f.write("3,5.0,1e8")
     ran.clear()
-    resumed = vtb.sweep(short, **GRID, out=out, chunk=2, progress=False)
-    assert ran == [2, 3, 4]
-    _same(reference, resumed)
-    ran.clear()
     again = vtb.sweep(short, **GRID, out=out, progress=False)
-    assert ran == []
+    assert sum(ran) == 0
     _same(reference, again)
 
 
@@ -186,8 +195,8 @@ def test_changed_grid_reruns_cases_whose_parameters_differ(short, tmp_path, monk
     out = tmp_path / "s.csv"
     vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
     ran = []
-    real = sweep_mod._run_chunk
-    monkeypatch.setattr(sweep_mod, "_run_chunk", lambda config, cases, threads: ran.extend(c[0] for c in cases) or real(config, cases, threads))
+    real = sweep_mod._run_cases
+    monkeypatch.setattr(sweep_mod, "_run_cases", lambda config, cases, threads, on_rows: ran.extend(c[0] for c in cases) or real(config, cases, threads, on_rows))
     r = vtb.sweep(short, b_t=[5.0], k_t=[1e8], c_t=[1e3], out=out, progress=False)
     assert ran == [1] and r.columns["k_t"][1] == 1e8
 
@@ -209,13 +218,13 @@ ONE = dict(b_t=[5.0], k_t=[2e8], c_t=[1e3])
 def _recording(monkeypatch):
     """Records the (b_t, k_t, c_t) of every case run (None for the baseline)."""
     ran = []
-    real = sweep_mod._run_chunk
+    real = sweep_mod._run_cases
 
-    def recording(config, cases, threads):
+    def recording(config, cases, threads, on_rows):
         ran.extend(None if math.isnan(b) else (b, k, c) for _, b, k, c in cases)
-        return real(config, cases, threads)
+        return real(config, cases, threads, on_rows)
 
-    monkeypatch.setattr(sweep_mod, "_run_chunk", recording)
+    monkeypatch.setattr(sweep_mod, "_run_cases", recording)
     return ran
 
 
@@ -257,16 +266,18 @@ def test_extended_grid_reruns_only_the_new_cases(short, reference, tmp_path, mon
 
 def test_failed_cases_are_retried_on_resume(short, reference, tmp_path, monkeypatch):
     out = tmp_path / "s.csv"
-    real = sweep_mod._run_chunk
+    real = sweep_mod._run_cases
 
-    def failing(config, cases, threads):
-        rows = real(config, cases, threads)
-        for r in rows:
-            if (r["b_t"], r["k_t"]) == (5.0, 1e8):
-                r.update({m: math.nan for m in METRICS}, error="ConvergenceError: made up")
-        return rows
+    def failing(config, cases, threads, on_rows):
+        def altered(rows):
+            for r in rows:
+                if (r["b_t"], r["k_t"]) == (5.0, 1e8):
+                    r.update({m: math.nan for m in METRICS}, error="ConvergenceError: made up")
+            on_rows(rows)
 
-    monkeypatch.setattr(sweep_mod, "_run_chunk", failing)
+        real(config, cases, threads, altered)
+
+    monkeypatch.setattr(sweep_mod, "_run_cases", failing)
     first = vtb.sweep(short, **GRID, out=out, progress=False)
     assert list(first.columns["error"]).count("ConvergenceError: made up") == 1
     monkeypatch.undo()

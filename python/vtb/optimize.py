@@ -63,30 +63,89 @@ def objectives(metrics: dict, baseline: dict) -> tuple:
 
 
 @dataclasses.dataclass
+class DesignJournal:
+    """The designs an optimisation has evaluated, by (b_t, k_t, c_t): ``cache`` in memory and,
+    given ``path`` (JSON lines: the optimisation's identity, then one design per line with its
+    rows), on disk, a design written as soon as all its runs finished, so that an interrupted
+    generation resumes without running it again. A run is deterministic, so nothing depends on
+    what the journal holds but the time it saves."""
+
+    path: Optional[Path] = None
+    cache: dict = dataclasses.field(default_factory=dict)
+
+    def load(self, identity) -> None:
+        """Reads ``path`` (its first line must be ``identity``) into the cache, or starts it."""
+        if self.path is None:
+            return
+        if self.path.exists() and self.path.stat().st_size:
+            lines = self.path.read_text().splitlines()
+            if json.loads(lines[0]) != json.loads(json.dumps(identity)):
+                raise config_error("checkpoint", str(self.path), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
+            for line in lines[1:]:
+                try:
+                    d = json.loads(line)
+                except ValueError:  # a line cut short by a kill
+                    continue
+                self.cache[tuple(d["x"])] = d["rows"]
+        else:
+            self.path.write_text(json.dumps(identity) + "\n")
+
+    def add(self, x, rows) -> None:
+        self.cache[tuple(x)] = rows
+        if self.path is not None:
+            with open(self.path, "a") as f:
+                f.write(json.dumps(dict(x=[float(v) for v in x], rows=rows)) + "\n")
+
+    def run(self, X: np.ndarray, configs_of, row_of, threads: Optional[int]) -> None:
+        """Runs every design of X not yet known, in one batch: ``configs_of(x)`` gives its
+        configurations, ``row_of(k, result)`` the row of its k-th run (a metrics dict or an
+        exception); a design is added once all its runs are in."""
+        todo = [x for x in dict.fromkeys(map(tuple, X)) if x not in self.cache]
+        if not todo:
+            return
+        per = [configs_of(np.array(x)) for x in todo]
+        owner = [(d, k) for d, cs in enumerate(per) for k in range(len(cs))]
+        got = [[None] * len(cs) for cs in per]
+
+        def done(i, r):
+            d, k = owner[i]
+            got[d][k] = row_of(k, r)
+            if all(row is not None for row in got[d]):
+                self.add(todo[d], got[d])
+
+        simulate_batch([c for cs in per for c in cs], threads=threads, on_error="return", on_result=done)
+
+
+@dataclasses.dataclass
 class TidObjectives:
     """The evaluation of one generation (picklable, for executors): X rows (b_t, k_t, c_t) →
     F = (a_rm, a_sm), G = X/X0 − 1 for the four constrained indices. A failed run counts as
-    infeasible (G = ∞) with F = 10 × the uncontrolled values. ``cache`` keeps every run's
-    metrics by (b_t, k_t, c_t) when evaluated in process; it only saves runs (a run is
-    deterministic), so nothing depends on what it holds."""
+    infeasible (G = ∞) with F = 10 × the uncontrolled values. ``designs`` keeps every
+    evaluated design's metrics (``None`` for a failed run) and journals them beside a
+    checkpoint."""
 
     config: Config
     baseline: dict
     threads: Optional[int] = None
-    cache: dict = dataclasses.field(default_factory=dict)
+    designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
+
+    @property
+    def cache(self) -> dict:
+        return self.designs.cache
 
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
-        runs = simulate_batch([case_config(self.config, *x) for x in X], threads=self.threads, on_error="return")
+        self.designs.run(X, lambda x: [case_config(self.config, *x)],
+                         lambda _, r: None if isinstance(r, BaseException) else {m: float(r[m]) for m in METRICS}, self.threads)
         F = np.empty((len(X), 2))
         G = np.empty((len(X), len(CONSTRAINTS)))
-        for i, (x, r) in enumerate(zip(X, runs)):
-            if isinstance(r, BaseException):
+        for i, x in enumerate(X):
+            m = self.cache[tuple(x)][0]
+            if m is None:
                 F[i] = [10 * self.baseline["rail_acc_max"], 10 * self.baseline["slab_acc_max"]]
                 G[i] = np.inf
                 continue
-            self.cache[tuple(x)] = {m: float(r[m]) for m in METRICS}
-            F[i], G[i] = objectives(r, self.baseline)
+            F[i], G[i] = objectives(m, self.baseline)
         return F, G
 
 
@@ -245,10 +304,13 @@ def optimize(
     initial = None
     if warm_start is not None:
         X0, F0, G0, metrics = warm_start_points(warm_start, config, baseline)
-        evaluate.cache.update(zip(map(tuple, X0), metrics))
+        evaluate.cache.update((tuple(x), [m]) for x, m in zip(X0, metrics))
         initial = (X0, F0, G0)
     problem = tid_problem(evaluate)
     identity = checkpoint_identity(config, baseline)
+    if checkpoint is not None and executor is None:
+        evaluate.designs.path = Path(str(checkpoint) + ".designs.jsonl")
+        evaluate.designs.load(identity)
     res = moga.minimize(
         problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor,
         hv_ref=(baseline["rail_acc_max"], baseline["slab_acc_max"]), initial=initial, stop_hv=stop_hv,
@@ -258,7 +320,7 @@ def optimize(
     missing = [x for x in X if tuple(x) not in evaluate.cache]
     if missing:
         evaluate(np.array(missing))
-    rows = [evaluate.cache[tuple(x)] for x in X]
+    rows = [evaluate.cache[tuple(x)][0] for x in X]
     pareto = {"b_t": X[:, 0], "k_t": X[:, 1], "c_t": X[:, 2]}
     for m in METRICS:
         pareto[m] = np.array([r[m] for r in rows])

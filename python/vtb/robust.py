@@ -20,7 +20,6 @@ N: it halves when N quadruples.
 from __future__ import annotations
 
 import dataclasses
-import json
 import contextlib
 import math
 import re
@@ -32,7 +31,7 @@ import numpy as np
 from . import moga, tid_sweep
 from .config import Config, TIDs
 from .errors import VtbError, config_error
-from .optimize import CONSTRAINTS, OptimizationResult, checkpoint_identity, tid_problem
+from .optimize import CONSTRAINTS, DesignJournal, OptimizationResult, checkpoint_identity, tid_problem
 from .presets import tids_around
 from .simulate import simulate_batch
 from .tid_sweep import METRICS, case_config, config_stamp
@@ -395,20 +394,21 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
             if not jobs:
                 continue
 
-            def step(d, base=done):
-                if bar is not None:
-                    bar.update(base + d - bar.n)
-                if report is not None:
-                    report(base + d, total)
-
-            results = simulate_batch([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], threads=threads, on_error="return", progress=step)
-            new = tid_sweep.case_rows([case for _, case in jobs], results)
-            for st in group:
-                mine = [r for (owner, _), r in zip(jobs, new) if owner is st]
+            def finished(i, r, jobs=jobs):
+                # each case's row journaled as soon as its lockstep group finishes
+                nonlocal done
+                st, case = jobs[i]
+                row = tid_sweep.case_rows([case], [r])
                 if st[3] is not None:
-                    tid_sweep._append_rows(st[3], mine)
-                st[4].extend(mine)
-            done += len(jobs)
+                    tid_sweep._append_rows(st[3], row)
+                st[4].extend(row)
+                done += 1
+                if bar is not None:
+                    bar.update(done - bar.n)
+                if report is not None:
+                    report(done, total)
+
+            simulate_batch([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], threads=threads, on_error="return", on_result=finished)
     return RobustSweep([(v, s, tid_sweep._result(rows, cfg)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
 
 
@@ -416,53 +416,35 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
 @dataclasses.dataclass
 class RobustObjectives:
     """A generation's evaluation over samples and speeds (picklable): X rows (b_t, k_t, c_t)
-    → :func:`robust_objectives`. Every design runs on every case, all in one batch. ``cache``
-    keeps each design's case rows; ``journal`` (a JSON-lines file) gets them appended as they
-    are computed, so a resumed optimisation knows every design its interrupted run evaluated."""
+    → :func:`robust_objectives`. Every design runs on every case, all in one batch;
+    ``designs`` keeps each design's case rows and journals a design as soon as all its cases
+    finished, so a resumed optimisation runs no design its interrupted run finished."""
 
     config: Config
     todo: list
     baselines: list
     statistic: str
     threads: Optional[int] = None
-    cache: dict = dataclasses.field(default_factory=dict)
-    journal: Optional[Path] = None
+    designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
 
-    def load(self, identity) -> None:
-        """Reads ``journal`` (its first line must be ``identity``) into the cache, or starts it."""
-        if self.journal.exists() and self.journal.stat().st_size:
-            lines = self.journal.read_text().splitlines()
-            if json.loads(lines[0]) != json.loads(json.dumps(identity)):
-                raise config_error("checkpoint", str(self.journal), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
-            for line in lines[1:]:
-                try:
-                    d = json.loads(line)
-                except ValueError:  # a line cut short by a kill
-                    continue
-                self.cache[tuple(d["x"])] = d["rows"]
-        else:
-            self.journal.write_text(json.dumps(identity) + "\n")
+    @property
+    def cache(self) -> dict:
+        return self.designs.cache
+
+    def _configs(self, x) -> list:
+        out = []
+        for _, _, cfg in self.todo:
+            c = cfg.copy()
+            c.tids = self.config.tids
+            out.append(case_config(c, *x))
+        return out
 
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
-        configs = []
-        for x in X:
-            for _, _, cfg in self.todo:
-                c = cfg.copy()
-                c.tids = self.config.tids
-                configs.append(case_config(c, *x))
-        runs = simulate_batch(configs, threads=self.threads, on_error="return")
-        n = len(self.todo)
+        self.designs.run(X, self._configs, lambda k, r: _run_row(self.todo[k][0], self.todo[k][1], self.baselines[k], r), self.threads)
         F, G = np.empty((len(X), 2)), np.empty((len(X), len(CONSTRAINTS)))
         for i, x in enumerate(X):
-            rows = []
-            for (v, s, _), m0, r in zip(self.todo, self.baselines, runs[i * n:(i + 1) * n]):
-                rows.append(_run_row(v, s, m0, r))
-            self.cache[tuple(x)] = rows
-            F[i], G[i] = robust_objectives(rows, self.statistic)
-        if self.journal is not None:
-            with open(self.journal, "a") as f:
-                f.write("".join(json.dumps(dict(x=[float(v) for v in x], rows=self.cache[tuple(x)])) + "\n" for x in X))
+            F[i], G[i] = robust_objectives(self.cache[tuple(x)], self.statistic)
         return F, G
 
 
@@ -555,7 +537,7 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
     identity = checkpoint_identity(config, baselines, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
     journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
-    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, journal=journal)
+    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, DesignJournal(journal))
     initial = None
     if warm_start is not None:
         X0 = np.array(warm_start.designs).reshape(-1, 3)
@@ -565,8 +547,7 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
             evaluate.cache[tuple(x)] = rows
             FG.append(robust_objectives(rows, statistic_name))
         initial = (X0, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)))
-    if journal is not None:
-        evaluate.load(identity)
+    evaluate.designs.load(identity)
     problem = tid_problem(evaluate)
     res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=(1.0, 1.0),
                         initial=initial, stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Optional, Sequence, Union
+from typing import Callable, Optional, Sequence, Union
 
 import numpy as np
 
@@ -377,6 +377,7 @@ def simulate_batch(
     on_error: str = "raise",
     histories: bool = False,
     lanes: Optional[int] = None,
+    on_result: Optional[Callable] = None,
 ) -> list:
     """Runs many configurations in parallel in Rust and returns each run's metrics dict (or,
     with ``histories=True``, its full :class:`Result`).
@@ -394,6 +395,11 @@ def simulate_batch(
     ``"return"`` puts the exception object in its place and continues. Configurations that
     share an irregularity specification share one generated profile. Ctrl-C interrupts the
     batch within a fraction of a second.
+
+    ``on_result``: ``f(i, item)``, called from the calling thread as soon as each run's
+    lockstep group finishes, with the index into ``configs`` and what the returned list will
+    hold there (a metrics dict, a :class:`Result`, or the exception object): a study journals
+    its finished cases with it, so that an interrupted batch keeps them.
     """
     if on_error not in ("raise", "return"):
         raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
@@ -452,24 +458,35 @@ def simulate_batch(
         if _cb is not None:
             _cb(offset + done)
 
+    def item(j, r):
+        """What the returned list holds for job j's raw result r."""
+        i = order[j]
+        return _result(r, configs[i]) if histories and isinstance(r, dict) else r
+
     try:
         for red, members in groups.values():
+            def each(k, r, _members=members):
+                j = _members[k]
+                out[j] = item(j, r)
+                on_result(order[j], out[j])
+
             got = _core.batch([jsons[j] for j in members], profiles, [profile_index[j] for j in members], threads or 0,
                               shifted if callback else None, histories,
-                              lanes or (SYNTHESIS_LANES if red is not None else DEFAULT_LANES), reduction=red)
+                              lanes or (SYNTHESIS_LANES if red is not None else DEFAULT_LANES), reduction=red,
+                              on_result=each if on_result is not None else None)
             for j, r in zip(members, got):
-                out[j] = r
+                if out[j] is None:
+                    out[j] = item(j, r)
             offset += len(members)
     finally:
         if bar is not None:
-            bar.update(len(jsons) - bar.n)
             bar.close()
     for i, r in zip(order, out):
         if r is None:  # its reduction failed (kept above)
             continue
         if isinstance(r, BaseException) and on_error == "raise":
             raise r
-        results[i] = _result(r, configs[i]) if histories and isinstance(r, dict) else r
+        results[i] = r
     return results
 
 

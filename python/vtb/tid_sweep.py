@@ -3,7 +3,7 @@
 ``vtb.sweep(config)`` runs the uncontrolled baseline and the Cartesian grid of (b_t, k_t, c_t)
 with the dampers of ``config.tids`` (default :func:`vtb.tids_around`), in parallel in Rust or
 through any :class:`concurrent.futures.Executor`. With ``out=`` finished cases are appended to a
-CSV journal chunk by chunk as they complete; re-running with the same path skips them.
+CSV journal as each lockstep group completes; re-running with the same path skips them.
 
 The journal: line 1 is its stamp, ``# vtb sweep journal {"config": {...}, "format": 1}`` (the
 swept configuration as JSON), line 2 the CSV header :data:`JOURNAL_COLUMNS`, then one row per
@@ -175,9 +175,18 @@ def case_rows(cases: list, results: list) -> list:
     return rows
 
 
+def _run_cases(config: Config, cases: list, threads: Optional[int], on_rows) -> None:
+    """Runs cases [(case, b, k, c)] in one batch, handing each finished case's journal row to
+    ``on_rows([row])`` as soon as its lockstep group finishes."""
+    simulate_batch([case_config(config, b, k, c) for _, b, k, c in cases], threads=threads, on_error="return",
+                   on_result=lambda i, r: on_rows(case_rows([cases[i]], [r])))
+
+
 def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
     """Runs cases [(case, b, k, c)] and returns their rows (picklable: executor workers)."""
-    return case_rows(cases, simulate_batch([case_config(config, b, k, c) for _, b, k, c in cases], threads=threads, on_error="return"))
+    rows = []
+    _run_cases(config, cases, threads, rows.extend)
+    return sorted(rows, key=lambda r: r["case"])
 
 
 def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> tuple:
@@ -394,11 +403,13 @@ def sweep(
     cases, with the standard errors. ``out`` is then a directory holding one journal per case.
 
     ``config.tids`` gives the dampers' count and positions (default: :func:`vtb.tids_around`).
-    In-process (default) the runs go to the Rust batch call on ``threads`` cores (all when
-    None); with ``executor`` (a process pool, or Dask's ``client.get_executor()``) chunks of
-    ``chunk`` cases are submitted to it and run there. A failing case (e.g. contact
-    non-convergence) is recorded with its reason and the sweep goes on. ``progress``: a tqdm bar
-    (True), none (False) or a callable ``f(done, total)``.
+    In-process (default) every case goes to one Rust batch call on ``threads`` cores (all when
+    None), and each lockstep group's cases are journaled and counted by the progress bar as
+    soon as the group finishes, so that Ctrl-C or a kill keeps them; with ``executor`` (a
+    process pool, or Dask's ``client.get_executor()``) chunks of ``chunk`` cases (default 8)
+    are submitted to it and run there, each journaled when it returns. A failing case (e.g.
+    contact non-convergence) is recorded with its reason and the sweep goes on. ``progress``: a
+    tqdm bar (True), none (False) or a callable ``f(done, total)``.
 
     ``out``: a CSV journal (``.parquet``: the journal is ``out + ".csv"`` and the Parquet table
     is written at the end). Finished runs are appended to it as they complete, and a re-run
@@ -440,10 +451,9 @@ def sweep(
             bar = tqdm(total=total, initial=done, desc="vtb sweep", unit="run")
         elif callable(progress):
             report = progress
-        n_workers = threads or os.cpu_count() or 1
-        # In-process chunks of 16 per worker: lockstep groups of four on every core, and one
-        # model built per chunk.
-        size = chunk or (16 * n_workers if executor is None else 8)
+        # With an executor, chunks of ``chunk`` cases are its tasks; in-process, every case is
+        # one batch whose lockstep groups are journaled as each finishes.
+        size = chunk or 8
         chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
 
         def finish(new_rows):
@@ -459,8 +469,7 @@ def sweep(
 
         try:
             if executor is None:
-                for ch in chunks:
-                    finish(_run_chunk(config, ch, threads))
+                _run_cases(config, todo, threads, finish)
             else:
                 futures = {executor.submit(_run_chunk, config, ch, 1): ch for ch in chunks}
                 try:

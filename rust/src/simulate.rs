@@ -14,8 +14,8 @@ use crate::synthesis::{self, Reduction};
 use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// Validates, assembles and integrates one configuration.
 pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&AtomicBool>) -> Result<RunResult> {
@@ -174,8 +174,39 @@ pub fn run_batch_with(
     cancel: Option<&AtomicBool>,
     done: Option<&AtomicUsize>,
 ) -> Vec<Result<RunResult>> {
+    let out: Mutex<Vec<Option<Result<RunResult>>>> =
+        Mutex::new((0..jobs.len()).map(|_| None).collect());
+    run_batch_each(jobs, opts, reduction, cancel, &|finished| {
+        if let Some(d) = done {
+            d.fetch_add(finished.len(), Ordering::Relaxed);
+        }
+        let mut out = out.lock().unwrap_or_else(|e| e.into_inner());
+        for (i, r) in finished {
+            out[i] = Some(r);
+        }
+    });
+    out.into_inner()
+        .unwrap_or_else(|e| e.into_inner())
+        .into_iter()
+        .map(|r| r.expect("every job has a result"))
+        .collect()
+}
+
+/// Receives results as they are known: (job index, result) pairs, a lockstep group's at once.
+pub type Sink<'a> = &'a (dyn Fn(Vec<(usize, Result<RunResult>)>) + Sync);
+
+/// `run_batch_with`, each lockstep group's results handed to `sink` as soon as the group
+/// finishes (jobs refused before running first, together), so that a caller can keep finished
+/// work while the batch goes on. Every job's result reaches the sink exactly once.
+pub fn run_batch_each(
+    jobs: &[Job],
+    opts: BatchOptions,
+    reduction: Option<&Reduction>,
+    cancel: Option<&AtomicBool>,
+    sink: Sink,
+) {
     let record = opts.record;
-    let mut out: Vec<Option<Result<RunResult>>> = (0..jobs.len()).map(|_| None).collect();
+    let mut refused = Vec::new();
     let mut keys: BTreeMap<String, usize> = BTreeMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, job) in jobs.iter().enumerate() {
@@ -184,7 +215,7 @@ pub fn run_batch_with(
             .validate(&job.profile)
             .and_then(|_| engine(&job.config, reduction).map(|_| ()))
         {
-            out[i] = Some(Err(e));
+            refused.push((i, Err(e)));
             continue;
         }
         let g = *keys.entry(model_key(&job.config)).or_insert_with(|| {
@@ -193,47 +224,33 @@ pub fn run_batch_with(
         });
         groups[g].push(i);
     }
+    if !refused.is_empty() {
+        sink(refused);
+    }
     let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let threads = rayon::current_num_threads();
-    let finished: Vec<(usize, Result<RunResult>)> = groups
-        .par_iter()
-        .flat_map_iter(|members| {
-            let first = &jobs[members[0]];
-            let model = if cancelled() {
-                Err(VtbError::Cancelled)
-            } else {
-                Model::build(first.config.clone(), (*first.profile).clone())
+    groups.par_iter().for_each(|members| {
+        let first = &jobs[members[0]];
+        let model = if cancelled() {
+            Err(VtbError::Cancelled)
+        } else {
+            Model::build(first.config.clone(), (*first.profile).clone())
+        };
+        let mut chunks = Vec::new();
+        let mut at = 0;
+        for w in lane_widths(members.len(), threads, opts.max_lanes) {
+            chunks.push(&members[at..at + w]);
+            at += w;
+        }
+        chunks.into_par_iter().for_each(|chunk| {
+            let res = match &model {
+                Err(e) => vec![Err(e.clone()); chunk.len()],
+                Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
+                Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
             };
-            let mut chunks = Vec::new();
-            let mut at = 0;
-            let widths = lane_widths(members.len(), threads, opts.max_lanes);
-            for w in widths {
-                chunks.push(&members[at..at + w]);
-                at += w;
-            }
-            let results: Vec<(usize, Result<RunResult>)> = chunks
-                .into_par_iter()
-                .flat_map_iter(|chunk| {
-                    let res = match &model {
-                        Err(e) => vec![Err(e.clone()); chunk.len()],
-                        Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                        Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
-                    };
-                    if let Some(d) = done {
-                        d.fetch_add(chunk.len(), Ordering::Relaxed);
-                    }
-                    chunk.iter().copied().zip(res).collect::<Vec<_>>()
-                })
-                .collect();
-            results
-        })
-        .collect();
-    for (i, r) in finished {
-        out[i] = Some(r);
-    }
-    out.into_iter()
-        .map(|r| r.expect("every job has a result"))
-        .collect()
+            sink(chunk.iter().copied().zip(res).collect());
+        });
+    });
 }
 
 /// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model (on its

@@ -7,8 +7,8 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
 
@@ -53,18 +53,17 @@ fn make_exception<'py>(py: Python<'py>, e: &VtbError) -> PyResult<Bound<'py, PyA
 
 /// Runs `work` on a worker thread with the GIL released. Every 50 ms the calling thread
 /// takes the GIL to process signals (Ctrl-C sets the cancel flag and re-raises) and to call
-/// `progress(done)` when the done-counter moved. A panic in the worker becomes a
+/// `tick` (progress, results as they come); an error from `tick` also cancels the work and is
+/// raised. `tick` runs once more after the work ends. A panic in the worker becomes a
 /// `SolverError` instead of crossing into Python.
-fn run_detached<T: Send>(
-    py: Python<'_>,
-    progress: Option<&Bound<'_, PyAny>>,
-    work: impl FnOnce(&AtomicBool, &AtomicUsize) -> T + Send,
+fn run_detached<'py, T: Send>(
+    py: Python<'py>,
+    mut tick: impl FnMut(Python<'py>) -> PyResult<()>,
+    work: impl FnOnce(&AtomicBool) -> T + Send,
 ) -> PyResult<T> {
     let cancel = AtomicBool::new(false);
-    let done = AtomicUsize::new(0);
     std::thread::scope(|s| {
-        let handle = s.spawn(|| work(&cancel, &done));
-        let mut reported = 0;
+        let handle = s.spawn(|| work(&cancel));
         loop {
             let finished = py.detach(|| {
                 for _ in 0..10 {
@@ -75,17 +74,10 @@ fn run_detached<T: Send>(
                 }
                 handle.is_finished()
             });
-            if let Err(e) = py.check_signals() {
+            if let Err(e) = py.check_signals().and_then(|_| tick(py)) {
                 cancel.store(true, Ordering::Relaxed);
                 let _ = py.detach(|| handle.join());
                 return Err(e);
-            }
-            if let Some(cb) = progress {
-                let d = done.load(Ordering::Relaxed);
-                if d != reported {
-                    cb.call1((d,))?;
-                    reported = d;
-                }
             }
             if finished {
                 break;
@@ -403,9 +395,11 @@ fn simulate<'py>(
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile)?;
     let red = reduction.map(|r| Arc::clone(&r.0));
-    let out = run_detached(py, None, |cancel, _| {
-        vtb::simulate_with(&cfg, &p, red.as_deref(), Some(cancel))
-    })?;
+    let out = run_detached(
+        py,
+        |_| Ok(()),
+        |cancel| vtb::simulate_with(&cfg, &p, red.as_deref(), Some(cancel)),
+    )?;
     let r = out.map_err(|e| to_py_err(py, e))?;
     result_to_dict(py, r)
 }
@@ -413,10 +407,11 @@ fn simulate<'py>(
 /// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0; jobs of
 /// one model in lockstep groups) and returns, in order, each run's metrics dict (or with
 /// `histories`, its full result dict) or its (unraised) exception. `profiles` are
-/// (x0, dx, values) triples shared by index through `profile_index`; `progress(done)` is
-/// called from the calling thread as runs finish.
+/// (x0, dx, values) triples shared by index through `profile_index`. From the calling thread,
+/// as each lockstep group finishes: `on_result(i, item)` for each of its runs (i indexes
+/// `configs`), then `progress(done)`.
 #[pyfunction]
-#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES, reduction=None))]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES, reduction=None, on_result=None))]
 #[allow(clippy::too_many_arguments)]
 fn batch<'py>(
     py: Python<'py>,
@@ -428,6 +423,7 @@ fn batch<'py>(
     histories: bool,
     max_lanes: usize,
     reduction: Option<&Reduction>,
+    on_result: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let red = reduction.map(|r| Arc::clone(&r.0));
     if configs.len() != profile_index.len() {
@@ -445,7 +441,9 @@ fn batch<'py>(
         .map(|(x0, dx, v)| make_profile(x0, dx, v).map(Arc::new))
         .collect::<PyResult<_>>()?;
     let mut jobs = Vec::with_capacity(configs.len());
-    let mut parse_errors: Vec<Option<VtbError>> = Vec::with_capacity(configs.len());
+    let mut items: Vec<Option<Bound<'py, PyAny>>> = vec![None; configs.len()];
+    // The configuration each job runs (parse errors are results of their own).
+    let mut job_config = Vec::with_capacity(configs.len());
     for (i, (text, &pi)) in configs.iter().zip(&profile_index).enumerate() {
         let profile = shared.get(pi).cloned().ok_or_else(|| {
             to_py_err(
@@ -460,39 +458,61 @@ fn batch<'py>(
         match Config::from_json(text) {
             Ok(config) => {
                 jobs.push(Job { config, profile });
-                parse_errors.push(None);
+                job_config.push(i);
             }
-            Err(e) => parse_errors.push(Some(e)),
+            Err(e) => items[i] = Some(make_exception(py, &e)?),
         }
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    let results = run_detached(py, progress.as_ref(), |cancel, done| {
-        let record = if histories {
-            Record::Full
-        } else {
-            Record::Metrics
-        };
-        let opts = BatchOptions { record, max_lanes };
-        pool.install(|| vtb::run_batch_with(&jobs, opts, red.as_deref(), Some(cancel), Some(done)))
-    })?;
-    let out = PyList::empty(py);
-    let mut it = results.into_iter();
-    for pe in parse_errors {
-        let item = match pe {
-            Some(e) => make_exception(py, &e)?,
-            None => match it.next().expect("one result per parsed config") {
+    let finished: Mutex<Vec<(usize, vtb::Result<RunResult>)>> = Mutex::new(Vec::new());
+    let mut done = 0;
+    let tick = |py: Python<'py>| -> PyResult<()> {
+        let ready = std::mem::take(&mut *finished.lock().unwrap_or_else(|e| e.into_inner()));
+        if ready.is_empty() {
+            return Ok(());
+        }
+        for (j, r) in ready {
+            let i = job_config[j];
+            let item = match r {
                 Ok(r) if histories => result_to_dict(py, r)?.into_any(),
                 Ok(r) => r.metrics().into_pyobject(py)?.into_any(),
                 Err(VtbError::Cancelled) => {
                     return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"));
                 }
                 Err(e) => make_exception(py, &e)?,
-            },
+            };
+            if let Some(cb) = &on_result {
+                cb.call1((i, &item))?;
+            }
+            items[i] = Some(item);
+            done += 1;
+        }
+        if let Some(cb) = &progress {
+            cb.call1((done,))?;
+        }
+        Ok(())
+    };
+    run_detached(py, tick, |cancel| {
+        let record = if histories {
+            Record::Full
+        } else {
+            Record::Metrics
         };
-        out.append(item)?;
+        let opts = BatchOptions { record, max_lanes };
+        let sink = |mut group: Vec<(usize, vtb::Result<RunResult>)>| {
+            finished
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .append(&mut group);
+        };
+        pool.install(|| vtb::run_batch_each(&jobs, opts, red.as_deref(), Some(cancel), &sink))
+    })?;
+    let out = PyList::empty(py);
+    for item in items {
+        out.append(item.expect("every configuration has a result"))?;
     }
     Ok(out)
 }
