@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import moga
+from vtb import moga, scaleout
 from vtb.presets import ARTICLE_RAIL_ACC
 
 
@@ -91,7 +91,7 @@ def _same_optimisation(a, b):
 
 def _batch_calls(monkeypatch, kill_at=None):
     """Counts the cases of each Rust batch of the optimiser; raises Killed at call ``kill_at``."""
-    calls, real = [], OPT.simulate_batch
+    calls, real = [], scaleout.simulate_batch
 
     def counting(configs, **kw):
         calls.append(len(configs))
@@ -99,7 +99,7 @@ def _batch_calls(monkeypatch, kill_at=None):
             raise Killed
         return real(configs, **kw)
 
-    monkeypatch.setattr(OPT, "simulate_batch", counting)
+    monkeypatch.setattr(scaleout, "simulate_batch", counting)
     return calls
 
 
@@ -131,7 +131,7 @@ def test_a_generation_killed_mid_batch_keeps_its_finished_designs(short, result,
     are in the designs journal, and the resumed run evaluates only the others."""
     ck = tmp_path / "opt.npz"
     journal = tmp_path / "opt.npz.designs.jsonl"
-    real = OPT.simulate_batch
+    real = scaleout.simulate_batch
     state = dict(batch=0)
 
     def killing(configs, **kw):
@@ -148,7 +148,7 @@ def test_a_generation_killed_mid_batch_keeps_its_finished_designs(short, result,
             kw = dict(kw, on_result=on_result, threads=1)
         return real(configs, **kw)
 
-    monkeypatch.setattr(OPT, "simulate_batch", killing)
+    monkeypatch.setattr(scaleout, "simulate_batch", killing)
     with pytest.raises(Killed):
         vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
     designs_before = len(journal.read_text().splitlines()) - 1  # the identity line

@@ -8,7 +8,7 @@ import pytest
 
 import vtb
 from fuzz_cases import small_config
-from vtb import robust
+from vtb import robust, scaleout
 
 
 def test_statistics_and_the_standard_error_follow_their_definitions():
@@ -155,11 +155,6 @@ def test_robust_studies_refuse_what_they_cannot_do():
     with pytest.raises(vtb.ConfigError) as e:
         vtb.optimize(cfg, samples=2, statistic="worst", pop_size=4, n_gen=1, progress=False)
     assert e.value.field == "statistic"
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(1) as ex, pytest.raises(vtb.ConfigError) as e:
-        vtb.sweep(cfg, [5.0], [2e8], [1e3], samples=2, executor=ex, progress=False)
-    assert e.value.field == "executor"
     rs = vtb.sweep(cfg, [5.0], [2e8], [1e3], samples=1, progress=False)
     with pytest.raises(vtb.ConfigError) as e:
         vtb.optimize(cfg, samples=2, warm_start=rs, pop_size=4, n_gen=1, progress=False)
@@ -192,7 +187,7 @@ def test_a_resumed_robust_optimisation_runs_nothing_and_knows_every_design(tmp_p
     def no_runs(*a, **k):
         raise AssertionError("a resumed, finished optimisation must not run anything")
 
-    monkeypatch.setattr(robust, "simulate_batch", no_runs)
+    monkeypatch.setattr(scaleout, "simulate_batch", no_runs)
     again = vtb.optimize(cfg, **kw)
     assert again.evaluated.keys() == first.evaluated.keys()
     assert all(again.evaluated[k] == first.evaluated[k] for k in first.evaluated)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import cli, study
+from vtb import cli, scaleout, study
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +85,7 @@ def test_a_resumed_level_search_runs_nothing(quick, monkeypatch):
     def no_runs(*args, **kwargs):
         raise AssertionError("a resumed level search ran the model")
 
-    monkeypatch.setattr(study, "simulate_batch", no_runs)
+    monkeypatch.setattr(scaleout, "simulate_batch", no_runs)
     factor, rows = study.no_loss_level(study.PLANS["quick"], False, quick / "levels.json")
     saved = _rows(quick / "levels.csv")
     assert [float(r["rail_acc_max"]) for r in saved] == pytest.approx([r["rail_acc_max"] for r in rows], rel=1e-12)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import vtb
+from vtb import scaleout
 from vtb import tid_sweep as sweep_mod
 from vtb.tid_sweep import COLUMNS, METRICS, SweepResult
 
@@ -71,13 +72,13 @@ def interrupted_then_resumed(config, grid, out, monkeypatch):
     cases journaled before the kill, the runs of every later batch call (a list the caller
     may clear) and the resumed result."""
     ran = []
-    real = sweep_mod.simulate_batch
+    real = scaleout.simulate_batch
 
     def counting(configs, **kw):
         ran.append(len(configs))
         return real(configs, **kw)
 
-    monkeypatch.setattr(sweep_mod, "simulate_batch", counting)
+    monkeypatch.setattr(scaleout, "simulate_batch", counting)
 
     def kill(done, total):
         assert 0 < done < total, "a kill mid-way needs more than one lockstep group"
@@ -196,7 +197,7 @@ def test_changed_grid_reruns_cases_whose_parameters_differ(short, tmp_path, monk
     vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
     ran = []
     real = sweep_mod._run_cases
-    monkeypatch.setattr(sweep_mod, "_run_cases", lambda config, cases, threads, on_rows: ran.extend(c[0] for c in cases) or real(config, cases, threads, on_rows))
+    monkeypatch.setattr(sweep_mod, "_run_cases", lambda config, cases, threads, on_rows, *rest: ran.extend(c[0] for c in cases) or real(config, cases, threads, on_rows, *rest))
     r = vtb.sweep(short, b_t=[5.0], k_t=[1e8], c_t=[1e3], out=out, progress=False)
     assert ran == [1] and r.columns["k_t"][1] == 1e8
 
@@ -220,9 +221,9 @@ def _recording(monkeypatch):
     ran = []
     real = sweep_mod._run_cases
 
-    def recording(config, cases, threads, on_rows):
+    def recording(config, cases, threads, on_rows, *rest):
         ran.extend(None if math.isnan(b) else (b, k, c) for _, b, k, c in cases)
-        return real(config, cases, threads, on_rows)
+        return real(config, cases, threads, on_rows, *rest)
 
     monkeypatch.setattr(sweep_mod, "_run_cases", recording)
     return ran
@@ -268,14 +269,14 @@ def test_failed_cases_are_retried_on_resume(short, reference, tmp_path, monkeypa
     out = tmp_path / "s.csv"
     real = sweep_mod._run_cases
 
-    def failing(config, cases, threads, on_rows):
+    def failing(config, cases, threads, on_rows, *rest):
         def altered(rows):
             for r in rows:
                 if (r["b_t"], r["k_t"]) == (5.0, 1e8):
                     r.update({m: math.nan for m in METRICS}, error="ConvergenceError: made up")
             on_rows(rows)
 
-        real(config, cases, threads, altered)
+        real(config, cases, threads, altered, *rest)
 
     monkeypatch.setattr(sweep_mod, "_run_cases", failing)
     first = vtb.sweep(short, **GRID, out=out, progress=False)

@@ -203,7 +203,7 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     """A TID sweep on the fast converged model (one span), Ctrl-C after its first lockstep
     group: the finished cases are journaled, the resume runs only the others, and the result
     equals an uninterrupted sweep's bit for bit."""
-    from vtb import tid_sweep
+    from vtb import scaleout, tid_sweep
 
     c = one_span()
     c.solver.t_end = 0.02
@@ -211,13 +211,13 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     grid = dict(b_t=[2.0, 5.0], k_t=[1e8, 2e8], c_t=[1e3])
     reference = vtb.sweep(c, **grid, progress=False)
     ran = []
-    real = tid_sweep.simulate_batch
+    real = scaleout.simulate_batch
 
     def counting(configs, **kw):
         ran.append(len(configs))
         return real(configs, **kw, lanes=2)
 
-    monkeypatch.setattr(tid_sweep, "simulate_batch", counting)
+    monkeypatch.setattr(scaleout, "simulate_batch", counting)
 
     def kill(done, total):
         assert 0 < done < total

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import shlex
@@ -187,13 +188,34 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def study_executor(args):
+    """The executor a study command's runs go to: a Dask cluster's (``--scheduler ADDRESS``),
+    else None (this process; :mod:`vtb.scaleout`)."""
+    address = getattr(args, "scheduler", None)
+    if not address:
+        yield None
+        return
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise config_error("--scheduler", address, "needs Dask: pip install 'vtb[dask]'") from None
+    try:
+        client = Client(address, timeout="30s")
+    except (OSError, TimeoutError) as e:
+        raise config_error("--scheduler", address, f"no Dask scheduler answers there ({type(e).__name__}: {e})") from None
+    with client:
+        yield client.get_executor()
+
+
 def cmd_validate(args) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
     from .validation import REFERENCE, errors, run_study, write_report
 
     check_out_file(args.out, "--out", args.force)
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+    with contextlib.ExitStack() as stack:
+        pool = stack.enter_context(study_executor(args)) if args.scheduler else stack.enter_context(ProcessPoolExecutor(max_workers=args.workers))
         cases = run_study(progress=not args.no_progress, executor=pool)
     command = shlex.join(["vtb", *args.argv])
     write_report(cases, args.out, command=command)
@@ -230,15 +252,17 @@ def cmd_sweep(args) -> int:
         check_out_file(args.report, "--report", args.force)
     cfg = _tid_config(args)
     t0 = time.perf_counter()
-    res = sweep(
-        cfg,
-        _floats(args.b) if args.b else ARTICLE_B,
-        _floats(args.k) if args.k else ARTICLE_K,
-        _floats(args.c) if args.c else ARTICLE_C,
-        out=args.out,
-        threads=args.threads,
-        progress=not args.no_progress,
-    )
+    with study_executor(args) as executor:
+        res = sweep(
+            cfg,
+            _floats(args.b) if args.b else ARTICLE_B,
+            _floats(args.k) if args.k else ARTICLE_K,
+            _floats(args.c) if args.c else ARTICLE_C,
+            out=args.out,
+            threads=args.threads,
+            progress=not args.no_progress,
+            executor=executor,
+        )
     text = sweep_report(res, args.report, seconds=time.perf_counter() - t0)
     print(text)
     print(f"# journal {args.out}" + (f", report {args.report}" if args.report else ""))
@@ -256,10 +280,11 @@ def cmd_optimize(args) -> int:
             raise config_error("--checkpoint", args.checkpoint, "is a directory, not a file")
         _writable_dir(Path(args.checkpoint).parent, "--checkpoint")
     cfg = _tid_config(args)
-    res = optimize(
-        cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads,
-        progress=not args.no_progress, warm_start=args.warm_start, stop_hv=args.stop_hv, checkpoint=args.checkpoint,
-    )
+    with study_executor(args) as executor:
+        res = optimize(
+            cfg, pop_size=args.pop, n_gen=args.gen, seed=args.seed, algorithm=args.algorithm, threads=args.threads,
+            progress=not args.no_progress, warm_start=args.warm_start, stop_hv=args.stop_hv, checkpoint=args.checkpoint, executor=executor,
+        )
     h = res.moga.history[-1]
     print(f"# {res.moga.n_gen} generations, {res.moga.n_evals} evaluations ({res.moga.message}); hypervolume {h.hypervolume:.6g} (m/s²)² against (a_rm0, a_sm0)")
     rows = res.table()
@@ -301,7 +326,9 @@ def cmd_reproduce(args) -> int:
     require_matplotlib("vtb reproduce")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its sweep journal and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
-    report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen, optimiser=args.optimiser)
+    with study_executor(args) as executor:
+        report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen,
+                     optimiser=args.optimiser, executor=executor)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -312,9 +339,16 @@ def cmd_study(args) -> int:
     require_matplotlib("vtb study")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
-    report = run(args.out, quick=args.quick, progress=not args.no_progress)
+    with study_executor(args) as executor:
+        report = run(args.out, quick=args.quick, progress=not args.no_progress, executor=executor)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def scheduler(sp) -> None:
+    """The ``--scheduler`` option of a study command."""
+    sp.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster whose scheduler is at ADDRESS (tcp://host:8786; docs/scaleout.md); "
+                    "its workers find the synthesis reduction in VTB_CACHE_DIR, which should be shared storage")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -331,12 +365,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
     v = sub.add_parser("validate", help="the convergence study: the article's case on every discretisation against a refined reference, as a Markdown page (about 15 minutes on two cores)")
     v.add_argument("--out", default="docs/validation.md", help="Markdown page to write (default: docs/validation.md)")
-    v.add_argument("--workers", type=int, default=2, help="runs at a time (default: 2)")
+    v.add_argument("--workers", type=int, default=2, help="runs at a time in local processes (default: 2)")
+    scheduler(v)
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.add_argument("--force", action="store_true", help="overwrite an existing --out page")
     v.set_defaults(func=cmd_validate)
 
     def tid_case(sp):
+        scheduler(sp)
         sp.add_argument("--config", help="TOML configuration or a shipped example's name (default: the article's case with vtb.tids_around dampers)")
         sp.add_argument("--calibrated", action="store_true", help="the article's case with the irregularity calibrated to a_rm0 = 1005.6 m/s²")
         sp.add_argument("--threads", type=int, help="worker threads (default: all cores)")
@@ -377,6 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--optimiser", choices=("warm", "cold", "both"), default="warm", help="warm: seeded from the sweep with the hypervolume stop (default); cold: the article's budget from a random start; both: the two, compared")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match)")
+    scheduler(r)
     r.set_defaults(func=cmd_reproduce)
 
     st = sub.add_parser("study", help="studies built on the article's chain")
@@ -386,6 +423,7 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--quick", action="store_true", help="the same stages on a short record with tiny budgets (about a minute; shows the pipeline, not findings)")
     rb.add_argument("--no-progress", action="store_true", help="no progress bars")
     rb.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its journals and checkpoints are reused when they match)")
+    scheduler(rb)
     rb.set_defaults(func=cmd_study)
     return p
 

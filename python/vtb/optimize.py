@@ -26,7 +26,8 @@ from . import moga
 from .config import Config
 from .errors import VtbError, config_error
 from .presets import tids_around
-from .simulate import Result, simulate, simulate_batch
+from .scaleout import run_cases
+from .simulate import Result, simulate
 from .tid_sweep import METRICS, SweepResult, case_config, config_stamp, read_journal
 
 #: (lower, upper) of b_t (kg), k_t (N/m), c_t (N·s/m): the article's bounds.
@@ -96,10 +97,11 @@ class DesignJournal:
             with open(self.path, "a") as f:
                 f.write(json.dumps(dict(x=[float(v) for v in x], rows=rows)) + "\n")
 
-    def run(self, X: np.ndarray, configs_of, row_of, threads: Optional[int]) -> None:
-        """Runs every design of X not yet known, in one batch: ``configs_of(x)`` gives its
-        configurations, ``row_of(k, result)`` the row of its k-th run (a metrics dict or an
-        exception); a design is added once all its runs are in."""
+    def run(self, X: np.ndarray, configs_of, row_of, threads: Optional[int], executor=None) -> None:
+        """Runs every design of X not yet known, in one batch (or tasks on ``executor``,
+        :mod:`vtb.scaleout`): ``configs_of(x)`` gives its configurations, ``row_of(k, result)``
+        the row of its k-th run (a metrics dict or an exception); a design is added once all
+        its runs are in."""
         todo = [x for x in dict.fromkeys(map(tuple, X)) if x not in self.cache]
         if not todo:
             return
@@ -113,7 +115,7 @@ class DesignJournal:
             if all(row is not None for row in got[d]):
                 self.add(todo[d], got[d])
 
-        simulate_batch([c for cs in per for c in cs], threads=threads, on_error="return", on_result=done)
+        run_cases([c for cs in per for c in cs], done, executor=executor, threads=threads)
 
 
 @dataclasses.dataclass
@@ -128,6 +130,7 @@ class TidObjectives:
     baseline: dict
     threads: Optional[int] = None
     designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
+    executor: object = None
 
     @property
     def cache(self) -> dict:
@@ -136,7 +139,7 @@ class TidObjectives:
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
         self.designs.run(X, lambda x: [case_config(self.config, *x)],
-                         lambda _, r: None if isinstance(r, BaseException) else {m: float(r[m]) for m in METRICS}, self.threads)
+                         lambda _, r: None if isinstance(r, BaseException) else {m: float(r[m]) for m in METRICS}, self.threads, self.executor)
         F = np.empty((len(X), 2))
         G = np.empty((len(X), len(CONSTRAINTS)))
         for i, x in enumerate(X):
@@ -257,8 +260,9 @@ def optimize(
 ) -> OptimizationResult:
     """Optimises the dampers of ``config`` (default :func:`vtb.tids_around`) for (a_rm, a_sm)
     under the article's constraints and bounds. ``algorithm``: ``"nsga2"`` or ``"gamultiobj"``
-    (see :mod:`vtb.moga`); ``executor``: evaluate generations through it instead of the
-    in-process Rust batch (configs pickle). The defaults are the article's cold budget:
+    (see :mod:`vtb.moga`); ``executor``: run each generation's designs as tasks on it
+    (:mod:`vtb.scaleout`) instead of the in-process Rust batch; every design is journaled beside
+    a ``checkpoint`` as soon as its runs are in, either way. The defaults are the article's cold budget:
     population 100 × 100 generations from a random start, no early stop.
 
     ``warm_start``: a sweep of the same configuration (a :class:`~vtb.tid_sweep.SweepResult`
@@ -283,16 +287,15 @@ def optimize(
     against the uncontrolled run of the same case, and the constraints statistic(X/X0) − 1 ≤ 0
     (:func:`vtb.robust.robust_objectives`); the hypervolume's reference point is (1, 1).
     Returns a :class:`vtb.robust.RobustOptimizationResult`; ``warm_start`` must then be a
-    :class:`vtb.robust.RobustSweep` of the same cases. ``executor`` is not supported there.
+    :class:`vtb.robust.RobustSweep` of the same cases.
     """
     if samples is not None or speeds is not None:
         from . import robust
 
-        if executor is not None:
-            raise config_error("executor", type(executor).__name__, "is not supported over samples and speeds (the cases of a generation run as one batch)")
         return robust.optimize_over(
             config, samples=samples, speeds=speeds, statistic_name=statistic, pop_size=pop_size, n_gen=n_gen, seed=seed,
-            algorithm=algorithm, threads=threads, progress=progress, warm_start=warm_start, stop_hv=stop_hv, checkpoint=checkpoint, **options,
+            algorithm=algorithm, threads=threads, progress=progress, warm_start=warm_start, stop_hv=stop_hv, checkpoint=checkpoint,
+            executor=executor, **options,
         )
     if config.tids is None:
         config = config.copy()
@@ -300,7 +303,7 @@ def optimize(
     base_run = simulate(case_config(config, math.nan, 0, 0))
     baseline = base_run.metrics()
     # Executor workers run one case at a time each.
-    evaluate = TidObjectives(config, baseline, 1 if executor is not None else threads)
+    evaluate = TidObjectives(config, baseline, threads, executor=executor)
     initial = None
     if warm_start is not None:
         X0, F0, G0, metrics = warm_start_points(warm_start, config, baseline)
@@ -308,11 +311,11 @@ def optimize(
         initial = (X0, F0, G0)
     problem = tid_problem(evaluate)
     identity = checkpoint_identity(config, baseline)
-    if checkpoint is not None and executor is None:
+    if checkpoint is not None:
         evaluate.designs.path = Path(str(checkpoint) + ".designs.jsonl")
         evaluate.designs.load(identity)
     res = moga.minimize(
-        problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, executor=executor,
+        problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress,
         hv_ref=(baseline["rail_acc_max"], baseline["slab_acc_max"]), initial=initial, stop_hv=stop_hv,
         checkpoint=checkpoint, checkpoint_identity=identity, **options,
     )

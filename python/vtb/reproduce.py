@@ -81,7 +81,7 @@ def _bands_figure(results, labels, out: Path) -> list:
     return [rows[k] for k in sorted(rows)]
 
 
-def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str = "warm", progress: bool = True) -> dict:
+def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str = "warm", progress: bool = True, executor=None) -> dict:
     """The §4.4 optimisation runs: ``"warm"`` starts from the sweep ``sw`` and stops on
     :data:`STOP_HV`, ``"cold"`` is the article's budget from a random start, ``"both"`` runs the
     two (the same seed, population and generation cap). Each run keeps a checkpoint in ``out``
@@ -96,7 +96,7 @@ def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str 
             t0 = time.perf_counter()
             opts = dict(warm_start=sw, stop_hv=STOP_HV) if label == "warm" else {}
             ckpt = out / f"optimisation_{label}_{plan['pop_size']}x{plan['n_gen']}_seed{seed}.npz"
-            res = optimize(cfg, pop_size=plan["pop_size"], n_gen=plan["n_gen"], seed=seed, progress=progress, checkpoint=ckpt, **opts)
+            res = optimize(cfg, pop_size=plan["pop_size"], n_gen=plan["n_gen"], seed=seed, progress=progress, checkpoint=ckpt, executor=executor, **opts)
             runs[label] = (res, time.perf_counter() - t0)
     _write_csv(out / "optimisation_history.csv", [
         dict(run=label, gen=h.gen, n_evals=h.n_evals, hypervolume=h.hypervolume, n_front=h.n_front, n_feasible=h.n_feasible)
@@ -105,11 +105,13 @@ def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str 
     return runs
 
 
-def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size: Optional[int] = None, n_gen: Optional[int] = None, optimiser: str = "warm") -> Path:
+def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size: Optional[int] = None, n_gen: Optional[int] = None, optimiser: str = "warm",
+        executor=None) -> Path:
     """Runs the chain and writes ``out/report.md`` with its figures (PNG and PDF) and tables.
     ``pop_size``, ``n_gen`` override the optimisation budget (full: 100 × 100; the warm run's
     cap). ``optimiser``: see :func:`optimisations`. The sweep journal ``out/sweep.csv`` and the
-    optimisers' checkpoints are resumed if present."""
+    optimisers' checkpoints are resumed if present. ``executor``: the sweep's and the
+    optimisations' runs as tasks on it (:mod:`vtb.scaleout`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     plan = dict(QUICK if quick else FULL)
@@ -146,7 +148,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     # §4.2–4.3: the sweep (Fig. 5, Table 2, Fig. 6).
     resumed = (out / "sweep.csv").exists()
     t0 = time.perf_counter()
-    sw = sweep(cfg, plan["b_t"], plan["k_t"], plan["c_t"], out=out / "sweep.csv", progress=progress)
+    sw = sweep(cfg, plan["b_t"], plan["k_t"], plan["c_t"], out=out / "sweep.csv", progress=progress, executor=executor)
     times["sweep"] = time.perf_counter() - t0
     t2 = sw.best_per_inertance()
     sweep_text = sweep_report(sw, out / "sweep.md", seconds=times["sweep"])
@@ -157,7 +159,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     _save(plotting.plot_slab_indices(t2, sw.baseline), out, "fig6_sweep_slab")
 
     # §4.4: the optimisation (Fig. 7, Table 3, Fig. 8, car body, frequency view).
-    runs = optimisations(cfg, sw, out, plan, seed, optimiser, progress)
+    runs = optimisations(cfg, sw, out, plan, seed, optimiser, progress, executor)
     for label, (_, seconds) in runs.items():
         times[f"optimisation ({label})"] = seconds
     opt = runs["warm" if "warm" in runs else "cold"][0]

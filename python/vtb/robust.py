@@ -33,7 +33,7 @@ from .config import Config, TIDs
 from .errors import VtbError, config_error
 from .optimize import CONSTRAINTS, DesignJournal, OptimizationResult, checkpoint_identity, tid_problem
 from .presets import tids_around
-from .simulate import simulate_batch
+from .scaleout import run_all, run_cases
 from .tid_sweep import METRICS, case_config, config_stamp
 
 #: First seed of the samples a design is chosen on.
@@ -256,9 +256,11 @@ def evaluate_designs(
     first_seed: int = HELD_OUT_SEED0,
     threads: Optional[int] = None,
     progress: bool = False,
+    executor=None,
 ) -> list:
     """:func:`evaluate_design` of several designs on the same cases, which run uncontrolled
-    once for all of them; one :class:`DesignEvaluation` per design."""
+    once for all of them; one :class:`DesignEvaluation` per design. ``executor``: see
+    :mod:`vtb.scaleout`."""
     tids = [_design_tids(config, d) for d in designs]
     todo = cases(config, samples, speeds, first_seed)
     controlled = []
@@ -267,7 +269,7 @@ def evaluate_designs(
             c = cfg.copy()
             c.tids = t
             controlled.append(c)
-    runs = simulate_batch([c for _, _, c in todo] + controlled, threads=threads, on_error="return", progress=progress)
+    runs = run_all([c for _, _, c in todo] + controlled, executor=executor, threads=threads, progress=progress, desc="vtb designs")
     n = len(todo)
     out = []
     for j, t in enumerate(tids):
@@ -359,12 +361,13 @@ class RobustSweep:
 
 
 def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name: str = "mean",
-               out=None, threads: Optional[int] = None, progress=True) -> RobustSweep:
+               out=None, threads: Optional[int] = None, progress=True, executor=None, chunk: Optional[int] = None) -> RobustSweep:
     """:func:`vtb.sweep` over samples and speeds (what it calls when given ``samples`` or
     ``speeds``): the grid and an uncontrolled run on every case and, with ``out`` (a
     directory), one journal per case, ``out/v<speed>_seed<seed>.csv``, so an interrupted study
     resumes. The cases of one speed run as one batch: their uncontrolled runs share one model,
-    their controlled runs another, and each runs in lockstep groups on every core."""
+    their controlled runs another, and each runs in lockstep groups on every core, or in tasks
+    on ``executor`` (:mod:`vtb.scaleout`); a case is journaled as soon as it is known."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
     config, grid_cases = tid_sweep.plan(config, b_t, k_t, c_t)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
@@ -408,7 +411,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 if report is not None:
                     report(done, total)
 
-            simulate_batch([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], threads=threads, on_error="return", on_result=finished)
+            run_cases([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], finished, executor=executor, threads=threads, chunk=chunk)
     return RobustSweep([(v, s, tid_sweep._result(rows, cfg)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
 
 
@@ -426,6 +429,7 @@ class RobustObjectives:
     statistic: str
     threads: Optional[int] = None
     designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
+    executor: object = None
 
     @property
     def cache(self) -> dict:
@@ -441,7 +445,8 @@ class RobustObjectives:
 
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
-        self.designs.run(X, self._configs, lambda k, r: _run_row(self.todo[k][0], self.todo[k][1], self.baselines[k], r), self.threads)
+        self.designs.run(X, self._configs, lambda k, r: _run_row(self.todo[k][0], self.todo[k][1], self.baselines[k], r), self.threads,
+                         self.executor)
         F, G = np.empty((len(X), 2)), np.empty((len(X), len(CONSTRAINTS)))
         for i, x in enumerate(X):
             F[i], G[i] = robust_objectives(self.cache[tuple(x)], self.statistic)
@@ -510,7 +515,7 @@ def _pareto_columns(X: np.ndarray, rows_of: list, statistic_name: str) -> dict:
 
 
 def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mean", pop_size: int, n_gen: int,
-                  seed: int, algorithm: str, threads, progress, warm_start, stop_hv, checkpoint, **options) -> RobustOptimizationResult:
+                  seed: int, algorithm: str, threads, progress, warm_start, stop_hv, checkpoint, executor=None, **options) -> RobustOptimizationResult:
     """:func:`vtb.optimize` over samples and speeds (what it calls when given ``samples`` or
     ``speeds``). Objectives and constraints: :func:`robust_objectives`; hypervolumes with the
     reference point (1, 1), the uncontrolled level of both objectives. ``warm_start``: a
@@ -530,14 +535,14 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
             raise config_error("warm_start", "RobustSweep", "is a sweep of other samples, speeds or configuration")
         baselines = [sw.baseline for _, _, sw in warm_start.sweeps]  # the same deterministic runs: not repeated
     else:
-        runs = simulate_batch([c for _, _, c in todo], threads=threads, on_error="return")
+        runs = run_all([c for _, _, c in todo], executor=executor, threads=threads)
         for (v, s, _), r in zip(todo, runs):
             if isinstance(r, BaseException):
                 raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
     identity = checkpoint_identity(config, baselines, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
     journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
-    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, DesignJournal(journal))
+    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, DesignJournal(journal), executor)
     initial = None
     if warm_start is not None:
         X0 = np.array(warm_start.designs).reshape(-1, 3)

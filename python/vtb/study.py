@@ -37,7 +37,7 @@ from .config import Irregularity
 from .presets import PAPER_SEED, paper_config, tids_around
 from .resolution import resolved_band
 from .robust import DESIGN_SEED0, HELD_OUT_SEED0, DesignEvaluation, evaluate_designs
-from .simulate import simulate_batch
+from .scaleout import run_all
 from .reproduce import ARTICLE_CAR_ACC, ARTICLE_TABLE3_1
 from .tid_sweep import ARTICLE_BEST_RAIL_CUT, config_stamp, pinned_pinned_frequency, sweep
 
@@ -95,7 +95,7 @@ def _grid(cfg, grid: dict) -> tuple:
     return tuple(grid["b_t"]), tuple(k), tuple(grid["c_t"])
 
 
-def no_loss_level(plan: dict, progress: bool, path: Path) -> tuple:
+def no_loss_level(plan: dict, progress: bool, path: Path, executor=None) -> tuple:
     """The largest factor of :data:`LEVEL_FACTORS` at which the uncontrolled converged run at
     the design speed (80 m/s, the article's sample) has no contact-loss event; and the rows
     of every level tried, with a smooth-rail run (factor 0: no irregularity) showing what the
@@ -113,7 +113,10 @@ def no_loss_level(plan: dict, progress: bool, path: Path) -> tuple:
     if saved is not None and saved["key"] == key:
         rows = saved["rows"]
     else:
-        runs = simulate_batch(cfgs, progress=progress)
+        runs = run_all(cfgs, executor=executor, progress=progress, desc="vtb levels")
+        failed = next((r for r in runs if isinstance(r, BaseException)), None)
+        if failed is not None:
+            raise failed
         rows = [dict(factor=f, scale=c.irregularity.scale if f > 0 else 0.0, rail_acc_max=r["rail_acc_max"], slab_acc_max=r["slab_acc_max"],
                      contact_force_min=r["contact_force_min"], contact_loss_events=r["contact_loss_events"])
                 for f, c, r in zip(LEVEL_FACTORS + (0.0,), cfgs, runs)]
@@ -122,12 +125,12 @@ def no_loss_level(plan: dict, progress: bool, path: Path) -> tuple:
     return (max(ok) if ok else min(LEVEL_FACTORS)), rows
 
 
-def converged_chain(cfg, plan: dict, out: Path, label: str, progress: bool) -> dict:
+def converged_chain(cfg, plan: dict, out: Path, label: str, progress: bool, executor=None) -> dict:
     """Sweep and warm-started optimisation of one configuration; its headline numbers."""
     t0 = time.perf_counter()
-    sw = sweep(cfg, *_grid(cfg, plan["grid"]), out=out / f"sweep_{label}.csv", progress=progress)
+    sw = sweep(cfg, *_grid(cfg, plan["grid"]), out=out / f"sweep_{label}.csv", progress=progress, executor=executor)
     pop, gens = plan["moga"]
-    opt = optimize(cfg, pop_size=pop, n_gen=gens, warm_start=sw, checkpoint=out / f"optimisation_{label}.npz", progress=progress)
+    opt = optimize(cfg, pop_size=pop, n_gen=gens, warm_start=sw, checkpoint=out / f"optimisation_{label}.npz", progress=progress, executor=executor)
     best, worst = sw.best(), sw.worst_slab_increase()
     base = sw.baseline
     res = dict(label=label, scale=cfg.irregularity.scale, baseline=base, sweep_best=best, worst_slab_increase=worst,
@@ -149,9 +152,10 @@ def _f_t(d: dict) -> float:
     return math.sqrt(d["k_t"] / d["b_t"]) / (2 * math.pi)
 
 
-def run(out, quick: bool = False, progress: bool = True) -> Path:
+def run(out, quick: bool = False, progress: bool = True, executor=None) -> Path:
     """Runs the study and writes ``out/report.md`` with its figures (PNG and PDF) and CSV
-    tables. Returns the report's path."""
+    tables. Returns the report's path. ``executor``: every stage's runs as tasks on it (a
+    process pool, or Dask's ``client.get_executor()``; :mod:`vtb.scaleout`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     plan = PLANS["quick" if quick else "full"]
@@ -161,18 +165,18 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
     # 1. The article's chain.
     t0 = time.perf_counter()
     reproduce.run(out / "article", quick=plan["article"]["quick"], progress=progress,
-                  pop_size=plan["article"]["pop_size"], n_gen=plan["article"]["n_gen"])
+                  pop_size=plan["article"]["pop_size"], n_gen=plan["article"]["n_gen"], executor=executor)
     article = json.loads((out / "article" / "summary.json").read_text())
     times["1. article chain (article model)"] = time.perf_counter() - t0
 
     # 2. The fast converged model at the calibrated level and without contact loss.
     t0 = time.perf_counter()
-    factor, levels = no_loss_level(plan, progress, out / "levels.json")
+    factor, levels = no_loss_level(plan, progress, out / "levels.json", executor)
     reproduce._write_csv(out / "levels.csv", levels)
     times["2a. level without contact loss"] = time.perf_counter() - t0
     chains = {}
     for label, f in (("calibrated", 1.0), ("no_loss", factor)):
-        chains[label] = converged_chain(_converged(plan, f), plan, out, label, progress)
+        chains[label] = converged_chain(_converged(plan, f), plan, out, label, progress, executor)
         times[f"2b. converged chain, {label.replace('_', ' ')} level"] = chains[label]["seconds"]
     reproduce._write_csv(out / "converged_chains.csv", [_chain_row(c) for c in chains.values()])
 
@@ -180,12 +184,13 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
     cfg = _converged(plan, factor)
     t0 = time.perf_counter()
     speeds, samples, stat = list(plan["speeds"]), plan["samples"], plan["statistic"]
-    rs = sweep(cfg, *_grid(cfg, plan["robust_grid"]), samples=samples, speeds=speeds, statistic=stat, out=out / "robust_sweep", progress=progress)
+    rs = sweep(cfg, *_grid(cfg, plan["robust_grid"]), samples=samples, speeds=speeds, statistic=stat, out=out / "robust_sweep", progress=progress,
+               executor=executor)
     times["3a. robust sweep"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     pop, gens = plan["robust_moga"]
     ropt = optimize(cfg, samples=samples, speeds=speeds, statistic=stat, pop_size=pop, n_gen=gens, warm_start=rs,
-                    checkpoint=out / "robust_optimisation.npz", progress=progress)
+                    checkpoint=out / "robust_optimisation.npz", progress=progress, executor=executor)
     times["3b. robust optimisation"] = time.perf_counter() - t0
     baselines = [dict(speed=v, seed=s, **b) for (v, s), b in ropt.baseline.items()]
     reproduce._write_csv(out / "robust_baselines.csv", baselines)
@@ -201,7 +206,7 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
     # the no-loss chain's optimum; without a feasible design there, its best sweep case
     single = chains["no_loss"].get("optimum") or chains["no_loss"]["sweep_best"]
     compare = {"single-sample optimum": _design(single), "robust optimum": _design(designs["all speeds"])}
-    held = _held_out(cfg, compare, plan["held_out"], speeds, out / "held_out.json", progress)
+    held = _held_out(cfg, compare, plan["held_out"], speeds, out / "held_out.json", progress, executor)
     reproduce._write_csv(out / "held_out.csv", [dict(design=k, **r) for k, ev in held.items() for r in ev.rows])
     times["4. held-out check"] = time.perf_counter() - t0
     times["total"] = time.perf_counter() - t_start
@@ -221,7 +226,7 @@ def run(out, quick: bool = False, progress: bool = True) -> Path:
     return out / "report.md"
 
 
-def _held_out(cfg, compare: dict, samples: int, speeds: list, path: Path, progress: bool) -> dict:
+def _held_out(cfg, compare: dict, samples: int, speeds: list, path: Path, progress: bool, executor=None) -> dict:
     """{label: DesignEvaluation} of the designs on the held-out cases; kept in ``path`` and
     reused when it holds the same designs, configuration and cases (a resumed study)."""
     key = dict(designs=compare, samples=samples, speeds=speeds, config=config_stamp(cfg))
@@ -230,7 +235,7 @@ def _held_out(cfg, compare: dict, samples: int, speeds: list, path: Path, progre
         if saved["key"] == key:
             return {k: DesignEvaluation(rows, dataclasses.replace(cfg.tids, inertance=d["b_t"], stiffness=d["k_t"], damping=d["c_t"]))
                     for (k, d), rows in zip(compare.items(), saved["rows"])}
-    evs = evaluate_designs(cfg, list(compare.values()), samples=samples, speeds=speeds, progress=progress)
+    evs = evaluate_designs(cfg, list(compare.values()), samples=samples, speeds=speeds, progress=progress, executor=executor)
     path.write_text(json.dumps(dict(key=key, rows=[ev.rows for ev in evs])) + "\n")
     return dict(zip(compare, evs))
 

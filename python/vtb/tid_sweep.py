@@ -22,7 +22,7 @@ import math
 import numbers
 import os
 import socket
-from concurrent.futures import Executor, as_completed
+from concurrent.futures import Executor
 from pathlib import Path
 from typing import Optional, Sequence, Union
 
@@ -33,7 +33,7 @@ from .errors import ConfigError, VtbError, config_error
 from .moga import write_atomically
 from .presets import tids_around
 from .resolution import pinned_pinned_frequency
-from .simulate import simulate_batch
+from .scaleout import run_cases
 from .tables import units_of
 
 #: The article's grid: b_t = 1..10 kg; k_t = 1..9 × 10^4..10^8 and 1e9 N/m; c_t = 10..1e4 N·s/m.
@@ -175,18 +175,11 @@ def case_rows(cases: list, results: list) -> list:
     return rows
 
 
-def _run_cases(config: Config, cases: list, threads: Optional[int], on_rows) -> None:
-    """Runs cases [(case, b, k, c)] in one batch, handing each finished case's journal row to
-    ``on_rows([row])`` as soon as its lockstep group finishes."""
-    simulate_batch([case_config(config, b, k, c) for _, b, k, c in cases], threads=threads, on_error="return",
-                   on_result=lambda i, r: on_rows(case_rows([cases[i]], [r])))
-
-
-def _run_chunk(config: Config, cases: list, threads: Optional[int]) -> list:
-    """Runs cases [(case, b, k, c)] and returns their rows (picklable: executor workers)."""
-    rows = []
-    _run_cases(config, cases, threads, rows.extend)
-    return sorted(rows, key=lambda r: r["case"])
+def _run_cases(config: Config, cases: list, threads: Optional[int], on_rows, executor=None, chunk: Optional[int] = None) -> None:
+    """Runs cases [(case, b, k, c)] (:func:`vtb.scaleout.run_cases`), handing each finished
+    case's journal row to ``on_rows([row])`` as soon as it is known."""
+    run_cases([case_config(config, b, k, c) for _, b, k, c in cases], lambda i, r: on_rows(case_rows([cases[i]], [r])),
+              executor=executor, threads=threads, chunk=chunk)
 
 
 def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> tuple:
@@ -406,10 +399,10 @@ def sweep(
     In-process (default) every case goes to one Rust batch call on ``threads`` cores (all when
     None), and each lockstep group's cases are journaled and counted by the progress bar as
     soon as the group finishes, so that Ctrl-C or a kill keeps them; with ``executor`` (a
-    process pool, or Dask's ``client.get_executor()``) chunks of ``chunk`` cases (default 8)
-    are submitted to it and run there, each journaled when it returns. A failing case (e.g.
-    contact non-convergence) is recorded with its reason and the sweep goes on. ``progress``: a
-    tqdm bar (True), none (False) or a callable ``f(done, total)``.
+    process pool, or Dask's ``client.get_executor()``) tasks of ``chunk`` cases (default one
+    lockstep group) run there, each journaled when it returns (:mod:`vtb.scaleout`). A failing
+    case (e.g. contact non-convergence) is recorded with its reason and the sweep goes on.
+    ``progress``: a tqdm bar (True), none (False) or a callable ``f(done, total)``.
 
     ``out``: a CSV journal (``.parquet``: the journal is ``out + ".csv"`` and the Parquet table
     is written at the end). Finished runs are appended to it as they complete, and a re-run
@@ -432,9 +425,8 @@ def sweep(
     if samples is not None or speeds is not None:
         from . import robust
 
-        if executor is not None:
-            raise config_error("executor", type(executor).__name__, "is not supported over samples and speeds (each case's grid runs as one batch)")
-        return robust.sweep_over(config, b_t, k_t, c_t, samples=samples, speeds=speeds, statistic_name=statistic, out=out, threads=threads, progress=progress)
+        return robust.sweep_over(config, b_t, k_t, c_t, samples=samples, speeds=speeds, statistic_name=statistic, out=out, threads=threads,
+                                 progress=progress, executor=executor, chunk=chunk)
     config, cases = plan(config, b_t, k_t, c_t)
     journal = None
     if out is not None:
@@ -451,11 +443,6 @@ def sweep(
             bar = tqdm(total=total, initial=done, desc="vtb sweep", unit="run")
         elif callable(progress):
             report = progress
-        # With an executor, chunks of ``chunk`` cases are its tasks; in-process, every case is
-        # one batch whose lockstep groups are journaled as each finishes.
-        size = chunk or 8
-        chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
-
         def finish(new_rows):
             nonlocal done
             rows.extend(new_rows)
@@ -468,21 +455,7 @@ def sweep(
                 report(done, total)
 
         try:
-            if executor is None:
-                _run_cases(config, todo, threads, finish)
-            else:
-                futures = {executor.submit(_run_chunk, config, ch, 1): ch for ch in chunks}
-                try:
-                    for fut in as_completed(futures):
-                        try:
-                            new = fut.result()
-                        except Exception as e:  # a worker lost: record its cases, carry on
-                            reason = " ".join(f"worker failed: {type(e).__name__}: {e}".split())
-                            new = [dict({m: math.nan for m in METRICS}, case=c, b_t=b, k_t=k, c_t=cc, error=reason) for c, b, k, cc in futures[fut]]
-                        finish(new)
-                finally:
-                    for fut in futures:
-                        fut.cancel()
+            _run_cases(config, todo, threads, finish, executor, chunk)
         finally:
             if bar is not None:
                 bar.close()

@@ -1,0 +1,104 @@
+"""Where a study's runs go: one Rust batch in this process, or tasks on an executor
+(docs/scaleout.md).
+
+Every study (sweeps, optimisations, robust studies, design evaluations, the validation and
+the robust study) hands its runs to :func:`run_cases`, which reports each run's result as soon
+as it is known, so that the study journals it at once:
+
+* in process (``executor=None``): one :func:`vtb.simulate_batch` call on ``threads`` cores;
+  its lockstep groups report as each finishes;
+* on an executor (a :class:`concurrent.futures.Executor`: a process pool, or Dask's
+  ``client.get_executor()``): tasks of ``chunk`` runs (default one lockstep group), each a
+  batch on one worker thread, reported as each task completes. Dask reruns the tasks of a
+  worker that dies on the others, so a lost worker loses nothing; a process pool that breaks
+  reports its unfinished runs as failed (:class:`WorkerLost`), which a study records and
+  retries on resume. Only the calling process writes journals, so they stay consistent.
+
+A run's result does not depend on where or with which others it ran (lockstep groups give
+each job its own bits), so every path gives the serial result bit for bit. Workers find a
+synthesis reduction in the disk cache (:func:`vtb.synthesis.cache_dir`; on a cluster, point
+``VTB_CACHE_DIR`` at shared storage) and keep it in memory for their later tasks.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Executor, as_completed
+from typing import Callable, Optional, Sequence
+
+from .config import Config
+from .errors import SolverError
+from .simulate import DEFAULT_LANES, SYNTHESIS_LANES, simulate_batch
+
+
+class WorkerLost(SolverError):
+    """The executor lost the worker that held a run (its process died, its pool broke)."""
+
+
+def _task(configs: list) -> list:
+    """One executor task: a batch on one worker thread (module level: picklable)."""
+    return simulate_batch(configs, threads=1, on_error="return")
+
+
+def default_chunk(configs: Sequence[Config]) -> int:
+    """One lockstep group of the configurations' engine."""
+    synthesis = any(c.discretisation.synthesis_cutoff is not None for c in configs)
+    return SYNTHESIS_LANES if synthesis else DEFAULT_LANES
+
+
+def run_cases(configs: Sequence[Config], on_result: Callable, *, executor: Optional[Executor] = None, threads: Optional[int] = None,
+              chunk: Optional[int] = None) -> None:
+    """Runs ``configs`` and calls ``on_result(i, item)`` for each as soon as it is known (i
+    indexes ``configs``; item: the run's metrics dict, or the exception it failed with). See
+    the module documentation for the two paths; ``chunk`` (executor only): runs per task."""
+    configs = list(configs)
+    if not configs:
+        return
+    if executor is None:
+        simulate_batch(configs, threads=threads, on_error="return", on_result=on_result)
+        return
+    size = chunk or default_chunk(configs)
+    tasks = [list(range(a, min(a + size, len(configs)))) for a in range(0, len(configs), size)]
+    futures = {executor.submit(_task, [configs[i] for i in t]): t for t in tasks}
+    try:
+        for fut in as_completed(futures):
+            try:
+                items = fut.result()
+            except Exception as e:  # the executor lost the task's worker
+                lost = WorkerLost(" ".join(f"worker failed: {type(e).__name__}: {e}".split()))
+                items = [lost] * len(futures[fut])
+            for i, item in zip(futures[fut], items):
+                on_result(i, item)
+    finally:
+        for fut in futures:
+            fut.cancel()
+
+
+def run_all(configs: Sequence[Config], *, executor: Optional[Executor] = None, threads: Optional[int] = None, chunk: Optional[int] = None,
+            on_result: Optional[Callable] = None, progress=False, desc: str = "vtb runs") -> list:
+    """:func:`run_cases`, the items returned in order; given ``on_result`` also reported as
+    they come, and counted on a tqdm bar (``progress=True``) or by ``progress(done, total)``."""
+    out: list = [None] * len(configs)
+    bar = None
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(configs), desc=desc, unit="run")
+    done = 0
+
+    def keep(i, item):
+        nonlocal done
+        out[i] = item
+        done += 1
+        if bar is not None:
+            bar.update(1)
+        elif callable(progress):
+            progress(done, len(configs))
+        if on_result is not None:
+            on_result(i, item)
+
+    try:
+        run_cases(configs, keep, executor=executor, threads=threads, chunk=chunk)
+    finally:
+        if bar is not None:
+            bar.close()
+    return out
