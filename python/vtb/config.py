@@ -190,6 +190,7 @@ class Output(StrictFields):
     points: list = _default("OutputConfig", "points")
     window: Optional[list] = _default("OutputConfig", "window")
     band_limit: Optional[float] = _default("OutputConfig", "band_limit")
+    indices: Optional[list] = _default("OutputConfig", "indices")
 
 
 @documented("TidConfig")

@@ -104,7 +104,7 @@ def cases(config: Config, samples, speeds: Optional[Sequence[float]], first: int
             cfg.speed = float(v)
             cfg.irregularity = dataclasses.replace(cfg.irregularity, seed=s)
             cfg.tids = None
-            out.append((float(v), s, cfg))
+            out.append((float(v), s, tid_sweep.recording_metrics(cfg)))
     return out
 
 

@@ -152,14 +152,25 @@ def grid(b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> li
     return [(i + 1, float(b), float(k), float(c)) for i, (b, k, c) in enumerate((b, k, c) for b in b_t for k in k_t for c in c_t)]
 
 
+def recording_metrics(config: Config) -> Config:
+    """``config`` reporting only the indices of :data:`METRICS` it has (``output.indices``):
+    its runs record only the layers those need."""
+    from . import _core
+
+    names = set(_core.index_names(config.to_core_json()))
+    config.output.indices = [m for m in METRICS if m in names]
+    return config
+
+
 def case_config(config: Config, b: float, k: float, c: float) -> Config:
-    """``config`` with its dampers' b_t, k_t, c_t set (NaN: no dampers, the baseline)."""
+    """``config`` with its dampers' b_t, k_t, c_t set (NaN: no dampers, the baseline),
+    reporting the indices of :data:`METRICS` (:func:`recording_metrics`)."""
     cfg = config.copy()
     if math.isnan(b):
         cfg.tids = None
     else:
         cfg.tids = dataclasses.replace(cfg.tids, inertance=b, stiffness=k, damping=c)
-    return cfg
+    return recording_metrics(cfg)
 
 
 def case_rows(cases: list, results: list) -> list:

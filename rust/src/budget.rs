@@ -47,7 +47,7 @@ pub fn model_bytes(cfg: &Config) -> f64 {
 /// Estimated bytes of the histories one job records.
 pub fn history_bytes(cfg: &Config, record: Record) -> f64 {
     let steps = cfg.n_steps() as f64 + 1.0;
-    let layers = cfg.structure.layers.len() as f64;
+    let layers = record.layers(cfg).len() as f64;
     let points = match record {
         Record::Full => cfg.observation_points().len() as f64,
         Record::Metrics => 1.0,
@@ -58,7 +58,14 @@ pub fn history_bytes(cfg: &Config, record: Record) -> f64 {
         Record::Metrics => cars.min(1.0),
     };
     let wheels = 4.0 * cars;
-    steps * (2.0 * layers * points + 2.0 * vehicle + wheels) * F64
+    // An observer's displacement and acceleration; a synthesis run also keeps its four
+    // readouts and the rail residual per step until the records are made (synthesis::run).
+    let per_observer = if cfg.discretisation.synthesis_cutoff.is_some() {
+        7.0
+    } else {
+        2.0
+    };
+    steps * (per_observer * layers * points + 2.0 * vehicle + wheels) * F64
 }
 
 fn refuse(

@@ -425,6 +425,12 @@ pub struct OutputConfig {
     /// the Nyquist frequency 1/(2·solver.dt). Empty (the default): raw indices.
     #[serde(default)]
     pub band_limit: Option<f64>,
+    /// The indices a run reports (names as in its metrics, e.g. `rail_acc_max`,
+    /// `slab_acc_rms`, `car_acc_max`, `contact_force_max`; no unit). A batch then records only
+    /// the layers these name, at the first observation point, which saves time on every
+    /// layer left out. Empty (the default): every index of every layer.
+    #[serde(default)]
+    pub indices: Option<Vec<String>>,
 }
 
 /// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
@@ -653,6 +659,21 @@ impl Config {
             1.0
         } else {
             0.5 * (1.0 - (std::f64::consts::PI * s / self.solver.fade_in).cos())
+        }
+    }
+
+    /// The layers a run's metrics need (`output.indices`; every layer without them), by index.
+    pub fn index_layers(&self) -> Vec<usize> {
+        let layers = &self.structure.layers;
+        match &self.output.indices {
+            None => (0..layers.len()).collect(),
+            Some(names) => (0..layers.len())
+                .filter(|&li| {
+                    names
+                        .iter()
+                        .any(|n| crate::results::layer_of_index(n, &layers[li].name))
+                })
+                .collect(),
         }
     }
 
@@ -1016,6 +1037,18 @@ impl Config {
         }
         if let Some(fc) = self.output.band_limit {
             crate::filter::check("output.band_limit", fc, dt)?;
+        }
+        if let Some(names) = &self.output.indices {
+            let known = crate::results::index_names(self);
+            for (i, n) in names.iter().enumerate() {
+                if !known.contains(n) {
+                    return Err(VtbError::config(
+                        format!("output.indices[{i}]"),
+                        n,
+                        format!("is not an index of this configuration; it has {}", known.join(", ")),
+                    ));
+                }
+            }
         }
         if !profile.values.is_empty() {
             positive("irregularity.dx", profile.dx)?;

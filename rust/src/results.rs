@@ -7,6 +7,38 @@ use crate::structure::Structure;
 use crate::vehicle::N_DOF;
 use std::collections::BTreeMap;
 
+/// The indices of every recorded layer (`{layer}_{suffix}`).
+const LAYER_INDICES: [&str; 4] = ["disp_max", "acc_max", "acc_rms", "acc_settle"];
+/// A layer's raw acceleration peak, kept beside a band-limited one.
+const RAW_PEAK: &str = "acc_max_raw";
+/// The first car's indices.
+const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
+/// The wheels' indices.
+const CONTACT_INDICES: [&str; 3] = ["contact_force_max", "contact_force_min", "contact_loss_events"];
+
+/// Every index a run of `cfg` can report (`output.indices` names a subset of these).
+pub fn index_names(cfg: &Config) -> Vec<String> {
+    let mut out = Vec::new();
+    for l in &cfg.structure.layers {
+        let raw = cfg.output.band_limit.map(|_| RAW_PEAK);
+        for s in LAYER_INDICES.iter().copied().chain(raw) {
+            out.push(format!("{}_{s}", l.name));
+        }
+    }
+    if !cfg.vehicles.is_empty() {
+        out.extend(CAR_INDICES.map(String::from));
+        out.extend(CONTACT_INDICES.map(String::from));
+    }
+    out
+}
+
+/// Whether `name` is an index of the layer `layer`.
+pub fn layer_of_index(name: &str, layer: &str) -> bool {
+    name.strip_prefix(layer)
+        .and_then(|s| s.strip_prefix('_'))
+        .is_some_and(|s| LAYER_INDICES.contains(&s) || s == RAW_PEAK)
+}
+
 /// A period during which a wheel had no contact (P = 0). `t_end` is `None` if contact was
 /// not regained before the end of the run.
 #[derive(Clone, Debug, PartialEq)]
@@ -16,13 +48,24 @@ pub struct ContactLoss {
     pub t_end: Option<f64>,
 }
 
-/// What a run keeps: everything, or only the series its metrics are computed from (every
-/// layer at the first observation point, the first car body's bounce, the contact forces):
-/// the batch of a study never holds the full histories of all its jobs.
+/// What a run keeps: everything, or only the series its metrics are computed from (the layers
+/// its indices need, `Config::index_layers`, at the first observation point; the first car
+/// body's bounce; the contact forces): the batch of a study never holds the full histories of
+/// all its jobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Record {
     Full,
     Metrics,
+}
+
+impl Record {
+    /// The structure's layers a run records, by index.
+    pub fn layers(self, cfg: &Config) -> Vec<usize> {
+        match self {
+            Record::Full => (0..cfg.structure.layers.len()).collect(),
+            Record::Metrics => cfg.index_layers(),
+        }
+    }
 }
 
 /// Histories sampled at t = i·dt, i = 0..=n_steps, stored time-major.
@@ -54,6 +97,8 @@ pub struct RunResult {
     pub window: Option<[f64; 2]>,
     /// Low-pass frequency (Hz) of the acceleration indices, `output.band_limit`.
     pub band_limit: Option<f64>,
+    /// The indices `metrics` reports, `output.indices` (all without).
+    pub indices: Option<Vec<String>>,
 }
 
 impl RunResult {
@@ -66,7 +111,8 @@ impl RunResult {
         n_wheels: usize,
         record: Record,
     ) -> Self {
-        let nl = st.layers.len();
+        let layers = record.layers(cfg);
+        let nl = layers.len();
         let len = n_steps + 1;
         let (n_cars, vehicle_dofs) = match record {
             Record::Full => (n_cars, N_DOF),
@@ -75,7 +121,7 @@ impl RunResult {
         Self {
             dt: cfg.solver.dt,
             n_steps,
-            layer_names: st.layers.iter().map(|l| l.name.clone()).collect(),
+            layer_names: layers.iter().map(|&l| st.layers[l].name.clone()).collect(),
             points: points.to_vec(),
             disp: vec![0.0; len * nl * points.len()],
             acc: vec![0.0; len * nl * points.len()],
@@ -88,6 +134,7 @@ impl RunResult {
             contact_loss: Vec::new(),
             window: cfg.output.window,
             band_limit: cfg.output.band_limit,
+            indices: cfg.output.indices.clone(),
         }
     }
 
@@ -131,6 +178,8 @@ impl RunResult {
     /// With a band limit ([`RunResult::band_limit`]) every acceleration index is taken of the
     /// whole record low-passed at that frequency (zero phase, [`crate::filter`]) before the
     /// window is applied, and each layer's raw peak is kept as `{name}_acc_max_raw`.
+    ///
+    /// With `output.indices` ([`RunResult::indices`]) only those are reported.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
         let steps = self.window_steps();
         let t0 = *steps.start() as f64 * self.dt;
@@ -143,26 +192,25 @@ impl RunResult {
             let d = &self.layer_disp(li, 0)[steps.clone()];
             let raw = self.layer_acc(li, 0);
             if self.band_limit.is_some() {
-                m.insert(
-                    format!("{name}_acc_max_raw"),
-                    amplitude(&raw[steps.clone()]),
-                );
+                m.insert(format!("{name}_{RAW_PEAK}"), amplitude(&raw[steps.clone()]));
             }
             let a = &limited(raw)[steps.clone()];
-            m.insert(format!("{name}_disp_max"), amplitude(d));
-            m.insert(format!("{name}_acc_max"), amplitude(a));
-            m.insert(format!("{name}_acc_rms"), rms(a));
-            m.insert(
-                format!("{name}_acc_settle"),
+            let values = [
+                amplitude(d),
+                amplitude(a),
+                rms(a),
                 t0 + settle_time(a, self.dt, 0.05),
-            );
+            ];
+            for (s, v) in LAYER_INDICES.iter().zip(values) {
+                m.insert(format!("{name}_{s}"), v);
+            }
         }
         if self.n_cars > 0 {
             let d = &self.vehicle_dof_disp(0, 0)[steps.clone()];
             let a = &limited(self.vehicle_dof_acc(0, 0))[steps.clone()];
-            m.insert("car_disp_max".into(), amplitude(d));
-            m.insert("car_acc_max".into(), amplitude(a));
-            m.insert("car_acc_rms".into(), rms(a));
+            for (s, v) in CAR_INDICES.iter().zip([amplitude(d), amplitude(a), rms(a)]) {
+                m.insert(s.to_string(), v);
+            }
         }
         if self.n_wheels > 0 {
             let nw = self.n_wheels;
@@ -171,15 +219,18 @@ impl RunResult {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                     (lo.min(*v), hi.max(*v))
                 });
-            m.insert("contact_force_max".into(), hi);
-            m.insert("contact_force_min".into(), lo);
             let (ta, tb) = (t0, *steps.end() as f64 * self.dt);
             let events = self
                 .contact_loss
                 .iter()
                 .filter(|e| e.t_start <= tb && e.t_end.is_none_or(|t| t >= ta))
                 .count();
-            m.insert("contact_loss_events".into(), events as f64);
+            for (s, v) in CONTACT_INDICES.iter().zip([hi, lo, events as f64]) {
+                m.insert(s.to_string(), v);
+            }
+        }
+        if let Some(keep) = &self.indices {
+            m.retain(|k, _| keep.contains(k));
         }
         m
     }

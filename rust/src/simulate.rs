@@ -647,7 +647,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     .flatten()
             })
             .collect();
-        for li in 0..st.layers.len() {
+        let layers = record.layers(cfg);
+        for &li in &layers {
             for &x in &points {
                 track.observe(&st.shape(li, x));
             }
@@ -727,7 +728,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
                 obs: points
                     .iter()
-                    .filter(|_| cfg.discretisation.local_deflection)
+                    .filter(|_| cfg.discretisation.local_deflection && layers.first() == Some(&0))
                     .map(|&x| {
                         let mut s = vec![0.0; fs.modes.len()];
                         fs.local_sines_into(x, &mut s);

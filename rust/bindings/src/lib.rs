@@ -531,6 +531,12 @@ fn schema() -> String {
     Config::schema()
 }
 
+/// Every index a run of the configuration can report (what `output.indices` may name).
+#[pyfunction]
+fn index_names(py: Python<'_>, config_json: &str) -> PyResult<Vec<String>> {
+    Ok(vtb::results::index_names(&parse_config(py, config_json)?))
+}
+
 /// `x` (sampled every `dt` s) low-passed at `band_limit` Hz by the core's zero-phase filter,
 /// the one every band-limited index uses.
 #[pyfunction]
@@ -636,6 +642,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(shapes, m)?)?;
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
+    m.add_function(wrap_pyfunction!(index_names, m)?)?;
     m.add_function(wrap_pyfunction!(check_schema, m)?)?;
     m.add_function(wrap_pyfunction!(low_pass, m)?)?;
     m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;

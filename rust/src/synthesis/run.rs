@@ -370,7 +370,9 @@ impl<'a, const W: usize> Run<'a, W> {
 
         // Observers: layer by layer, point by point.
         let movers = Mover::all(cfg);
-        let shapes: Vec<(usize, Shape)> = (0..st.layers.len())
+        let shapes: Vec<(usize, Shape)> = record
+            .layers(cfg)
+            .into_iter()
             .flat_map(|li| points.iter().map(move |&x| (li, x)))
             .map(|(li, x)| (li, st.shape(li, x)))
             .collect();

@@ -1,0 +1,64 @@
+"""Benchmark: a robust study (a TID sweep over irregularity samples and speeds) on the fast
+converged model, on a local Dask cluster of one worker and of two (one thread each), and in
+this process on every core; the speed-up from one worker to two, measured in one run.
+
+    python benches/bench_dask.py [--samples 4] [--t-end 0.6]
+
+Each worker loads the cached reduction once (a warm-up run per worker, not timed); then every
+configuration runs the same study. Prints the wall times, the speed-up and whether the results
+are bit for bit those of the in-process run.
+"""
+
+import argparse
+import time
+
+import numpy as np
+
+import vtb
+from vtb.tid_sweep import COLUMNS
+
+
+def study(cfg, samples, executor=None):
+    return vtb.sweep(cfg, [3.0, 5.0], [1e8, 2e8], [1e3], samples=samples, speeds=[70.0, 80.0], executor=executor, progress=False)
+
+
+def same(a, b) -> bool:
+    return all(
+        (list(x.columns[k]) == list(y.columns[k])) if k == "error" else np.array_equal(x.columns[k], y.columns[k], equal_nan=True)
+        for (_, _, x), (_, _, y) in zip(a.sweeps, b.sweeps) for k in COLUMNS
+    )
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--samples", type=int, default=4)
+    ap.add_argument("--t-end", type=float, default=0.6)
+    args = ap.parse_args()
+    from dask.distributed import Client, LocalCluster
+
+    cfg = vtb.paper_config(model="fast", calibrated=True)
+    cfg.solver.t_end = args.t_end
+    cfg.tids = vtb.tids_around(cfg)
+    warm = cfg.copy()
+    warm.solver.t_end = 0.01
+    n_runs = 2 * 2 * args.samples * (4 + 1)
+    vtb.simulate(warm)  # this process's reduction
+    t0 = time.perf_counter()
+    local = study(cfg, args.samples)
+    t_local = time.perf_counter() - t0
+    times = {}
+    for n in (1, 2):
+        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+            ex = client.get_executor()
+            for f in [ex.submit(vtb.simulate, warm) for _ in range(4 * n)]:  # every worker holds the reduction
+                f.result()
+            t0 = time.perf_counter()
+            res = study(cfg, args.samples, ex)
+            times[n] = time.perf_counter() - t0
+            print(f"{n} worker(s): {times[n]:.1f} s for {n_runs} runs; bit for bit the in-process result: {same(local, res)}", flush=True)
+    print(f"in process, every core: {t_local:.1f} s")
+    print(f"speed-up from 1 to 2 workers: {times[1] / times[2]:.2f} (target ≥ 1.8)")
+
+
+if __name__ == "__main__":
+    main()
