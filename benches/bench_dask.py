@@ -62,3 +62,6 @@ def main():
 
 if __name__ == "__main__":
     main()
+    import os
+
+    print("machine load: %.2f %.2f %.2f (1, 5, 15 min averages)" % os.getloadavg())

@@ -24,3 +24,7 @@ print(f"optimisation: population {args.pop} × {args.gen} generations ({res.moga
 print(f"per generation {s / args.gen:.1f} s; 100 generations ≈ {s / args.gen * 100 / 60:.1f} min")
 for r in res.table():
     print(r)
+
+import os  # noqa: E402
+
+print("machine load: %.2f %.2f %.2f (1, 5, 15 min averages)" % os.getloadavg())

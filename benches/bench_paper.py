@@ -40,3 +40,7 @@ for label, cfg in [("paper_config()", vtb.paper_config()), ('paper_config(model=
     print(f"  core run (assembly + time stepping): best {min(core):.3f} s, median {statistics.median(core):.3f} s")
 a, b = best.values()
 print(f"converged / article hybrid (core, best of {repeats}): {b / a:.1f}x")
+
+import os  # noqa: E402
+
+print("machine load: %.2f %.2f %.2f (1, 5, 15 min averages)" % os.getloadavg())

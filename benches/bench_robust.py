@@ -44,3 +44,7 @@ assert all(r["rail_acc_max"] == m1["rail_acc_max"] and r["rail_acc_max_0"] == m0
 n = 2 * args.samples
 print(f"{n} converged runs: one at a time {t_single:.1f} s ({t_single / n:.2f} s/run); batched {t_batch:.1f} s ({t_batch / n:.2f} s/run); "
       f"speed-up {t_single / t_batch:.2f}x")
+
+import os  # noqa: E402
+
+print("machine load: %.2f %.2f %.2f (1, 5, 15 min averages)" % os.getloadavg())

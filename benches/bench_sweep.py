@@ -30,3 +30,7 @@ res = vtb.sweep(cfg, out=args.out)
 seconds = time.perf_counter() - t0
 print(f"sweep: {len(res)} runs in {seconds:.1f} s ({seconds / 60:.1f} min)")
 print(sweep_report(res, args.report, seconds=seconds))
+
+import os  # noqa: E402
+
+print("machine load: %.2f %.2f %.2f (1, 5, 15 min averages)" % os.getloadavg())

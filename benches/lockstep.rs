@@ -100,4 +100,5 @@ fn main() {
             single / t
         );
     }
+    println!("  {}", common::machine_load());
 }

@@ -94,6 +94,7 @@ fn bench_paper(c: &mut Criterion) {
     print_factor_size(&converged);
     g.bench_function("converged_full_run", |b| b.iter(|| run(&converged)));
     g.finish();
+    println!("{}", common::machine_load());
 }
 
 criterion_group!(benches, bench_paper);

@@ -21,3 +21,15 @@ pub fn paper_profile() -> Profile {
         values,
     }
 }
+
+/// The machine's load (the 1, 5 and 15 min averages of /proc/loadavg; "unknown" elsewhere),
+/// printed with every timing: the machine is shared, so a time means little without it.
+pub fn machine_load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| {
+            let v: Vec<&str> = s.split_whitespace().take(3).collect();
+            (v.len() == 3).then(|| format!("load average {} {} {} (1, 5, 15 min)", v[0], v[1], v[2]))
+        })
+        .unwrap_or_else(|| "load unknown".into())
+}
