@@ -69,6 +69,8 @@ def test_lockstep_jobs_on_patches_give_the_bits_of_single_runs():
     base.tids = vtb.tids_around(base, count=2, x=21.2)
     jobs = [case_config(base, *p) for p in ((5.0, 2e8, 1e3), (3.0, 1e8, 10.0), (8.0, 4e8, 1e4))]
     jobs[2].irregularity.seed = 11
+    for c in jobs:
+        c.output.indices = None  # every index, the labelled raw peak included
     alone = [vtb.simulate(c).metrics() for c in jobs]
     for lanes in (4, 2):
         out = vtb.simulate_batch(jobs, threads=1, lanes=lanes)

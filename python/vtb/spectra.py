@@ -135,7 +135,7 @@ def _levels(centre, lower, upper, power, ref, **extra) -> dict:
 def third_octave(x, fs: float, quantity: str = "acc", f_min: Optional[float] = None, f_max: Optional[float] = None) -> dict:
     """Energy-true one-third-octave band levels of the record ``x`` taken whole (module
     docstring): the one-sided periodogram of the record (no window, no averaging) puts each
-    frequency bin's power — |X_k|²/N², doubled but for 0 and the Nyquist frequency — wholly in
+    frequency bin's power — ``|X_k|²/N²``, doubled but for 0 and the Nyquist frequency — wholly in
     the band holding its frequency, so that the band powers, ``below`` (the bins under the
     first band, the mean included) and ``above`` sum to the mean square. ``quantity``:
     ``"acc"``, ``"vel"`` or ``"disp"`` picks the reference (:data:`REFERENCE`); ``f_min``,
