@@ -72,7 +72,7 @@ import inspect
 import sys
 
 from vtb import cli, reproduce
-from vtb.optimize import TidObjectives, warm_start_points
+from vtb.optimize import tid_objectives, warm_start_points
 
 OPT = sys.modules["vtb.optimize"]  # the module (vtb.optimize is the function)
 
@@ -186,7 +186,7 @@ def test_warm_start_points_are_what_the_evaluator_computes(short, result, swept)
     X, F, G, metrics = warm_start_points(swept, short, result.baseline)
     assert len(X) == 6
     inside = X[:, 1] <= 8e8
-    F_run, G_run = TidObjectives(short, result.baseline)(X[inside])
+    F_run, G_run = tid_objectives(short, result.baseline)(X[inside])
     assert np.array_equal(F[inside], F_run) and np.array_equal(G[inside], G_run)
     assert [m["rail_acc_max"] for m in metrics] == list(F[:, 0])
 

@@ -1,4 +1,4 @@
-"""The robust design study (vtb.study): the quick variant end to end, what CI runs. Its numbers
+"""The robust design study (vtb.robust_study): the quick variant end to end, what CI runs. Its numbers
 are not findings; what is checked is that every stage ran, that its tables hold what the
 report says, and that a held-out row is the run it claims to be."""
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import cli, scaleout, study
+from vtb import cli, scaleout
+from vtb import robust_study as study
 
 
 @pytest.fixture(scope="module")

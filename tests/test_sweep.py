@@ -9,6 +9,7 @@ import pytest
 
 import vtb
 from vtb import scaleout
+from vtb import studies as studies_mod
 from vtb import tid_sweep as sweep_mod
 from vtb.tid_sweep import COLUMNS, METRICS, SweepResult
 
@@ -195,11 +196,9 @@ def test_journal_of_another_configuration_is_refused(short, tmp_path):
 def test_changed_grid_reruns_cases_whose_parameters_differ(short, tmp_path, monkeypatch):
     out = tmp_path / "s.csv"
     vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], out=out, progress=False)
-    ran = []
-    real = sweep_mod._run_cases
-    monkeypatch.setattr(sweep_mod, "_run_cases", lambda config, cases, threads, on_rows, *rest: ran.extend(c[0] for c in cases) or real(config, cases, threads, on_rows, *rest))
+    ran = _recording(monkeypatch)
     r = vtb.sweep(short, b_t=[5.0], k_t=[1e8], c_t=[1e3], out=out, progress=False)
-    assert ran == [1] and r.columns["k_t"][1] == 1e8
+    assert ran == [(5.0, 1e8, 1e3)] and r.columns["k_t"][1] == 1e8
 
 
 def test_analyses_refuse_a_sweep_without_successes():
@@ -219,13 +218,13 @@ ONE = dict(b_t=[5.0], k_t=[2e8], c_t=[1e3])
 def _recording(monkeypatch):
     """Records the (b_t, k_t, c_t) of every case run (None for the baseline)."""
     ran = []
-    real = sweep_mod._run_cases
+    real = studies_mod.run_cases
 
-    def recording(config, cases, threads, on_rows, *rest):
-        ran.extend(None if math.isnan(b) else (b, k, c) for _, b, k, c in cases)
-        return real(config, cases, threads, on_rows, *rest)
+    def recording(configs, on_result, **kw):
+        ran.extend(None if c.tids is None else (c.tids.inertance, c.tids.stiffness, c.tids.damping) for c in configs)
+        return real(configs, on_result, **kw)
 
-    monkeypatch.setattr(sweep_mod, "_run_cases", recording)
+    monkeypatch.setattr(studies_mod, "run_cases", recording)
     return ran
 
 
@@ -267,18 +266,17 @@ def test_extended_grid_reruns_only_the_new_cases(short, reference, tmp_path, mon
 
 def test_failed_cases_are_retried_on_resume(short, reference, tmp_path, monkeypatch):
     out = tmp_path / "s.csv"
-    real = sweep_mod._run_cases
+    real = studies_mod.run_cases
 
-    def failing(config, cases, threads, on_rows, *rest):
-        def altered(rows):
-            for r in rows:
-                if (r["b_t"], r["k_t"]) == (5.0, 1e8):
-                    r.update({m: math.nan for m in METRICS}, error="ConvergenceError: made up")
-            on_rows(rows)
+    def failing(configs, on_result, **kw):
+        def altered(i, r):
+            t = configs[i].tids
+            made_up = t is not None and (t.inertance, t.stiffness) == (5.0, 1e8)
+            on_result(i, vtb.ConvergenceError("made up") if made_up else r)
 
-        real(config, cases, threads, altered, *rest)
+        real(configs, altered, **kw)
 
-    monkeypatch.setattr(sweep_mod, "_run_cases", failing)
+    monkeypatch.setattr(studies_mod, "run_cases", failing)
     first = vtb.sweep(short, **GRID, out=out, progress=False)
     assert list(first.columns["error"]).count("ConvergenceError: made up") == 1
     monkeypatch.undo()
@@ -358,8 +356,8 @@ def test_partial_last_line_is_still_dropped(short, journal_lines, tmp_path, monk
 _HOLDER = """
 import sys, time
 from pathlib import Path
-from vtb.tid_sweep import _journal_lock
-with _journal_lock(Path(sys.argv[1])):
+from vtb.journal import lock
+with lock(Path(sys.argv[1])):
     print("locked", flush=True)
     time.sleep(120)
 """

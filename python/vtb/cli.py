@@ -334,7 +334,7 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from .study import run
+    from .robust_study import run
 
     require_matplotlib("vtb study")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")

@@ -1,4 +1,12 @@
-"""Multi-objective TID optimisation of the article (§4.4, docs/model.md §9).
+"""Multi-objective optimisation over any fields and indices, and the article's TID problem
+(§4.4, docs/model.md §9) as its preset.
+
+``vtb.optimize(config, variables={path: (low, high, "log"|"linear")}, objectives=[index, ...],
+constraints=[(index, bound), ...])`` minimises the named indices (:func:`vtb.index_names`) over
+configuration fields named by their paths (:func:`vtb.set_field`), a bound being a number or
+``"reference"`` (the value of the run with the ``reference`` fields set, e.g. ``{"tids":
+None}``), written normalised as X/bound − 1 ≤ 0. Without ``variables`` it solves the article's
+problem:
 
 Objectives: the rail and slab acceleration amplitudes (a_rm, a_sm); constraints: a_rm, a_sm,
 a_rRMS and a_rst below their uncontrolled values, written normalised as X/X0 − 1 ≤ 0; bounds
@@ -28,13 +36,18 @@ from .errors import VtbError, config_error
 from .presets import tids_around
 from .scaleout import run_cases
 from .simulate import Result, simulate
-from .tid_sweep import METRICS, SweepResult, case_config, config_stamp, read_journal
+from .studies import _with_tids, get_field, index_names, set_field
+from .tid_sweep import METRICS, REFERENCE, SweepResult, case_config, config_stamp, read_journal
 
 #: (lower, upper) of b_t (kg), k_t (N/m), c_t (N·s/m): the article's bounds.
 BOUNDS = ((1.0, 10.0), (1e7, 8e8), (10.0, 5e3))
 LOG_SCALE = (False, True, True)
 #: Constraint indices: (metric, against the uncontrolled value).
 CONSTRAINTS = ("rail_acc_max", "slab_acc_max", "rail_acc_rms", "rail_acc_settle")
+#: The article's problem in the terms of the generic one (what :func:`optimize` solves by default).
+ARTICLE_VARIABLES = {"tids.b_t": (*BOUNDS[0], "linear"), "tids.k_t": (*BOUNDS[1], "log"), "tids.c_t": (*BOUNDS[2], "log")}
+ARTICLE_OBJECTIVES = ("rail_acc_max", "slab_acc_max")
+ARTICLE_CONSTRAINTS = tuple((m, "reference") for m in CONSTRAINTS)
 
 
 def tid_problem(evaluate) -> moga.Problem:
@@ -54,13 +67,6 @@ def checkpoint_identity(config: Config, baseline, **extra) -> dict:
         "baseline": hashlib.sha256(json.dumps(baseline, sort_keys=True).encode()).hexdigest(),
         **extra,
     }}
-
-
-def objectives(metrics: dict, baseline: dict) -> tuple:
-    """F = (a_rm, a_sm) and G = X/X0 − 1 of the :data:`CONSTRAINTS` for one run's metrics."""
-    F = [metrics["rail_acc_max"], metrics["slab_acc_max"]]
-    G = [metrics[m] / baseline[m] - 1.0 if baseline[m] > 0 else metrics[m] for m in CONSTRAINTS]
-    return F, G
 
 
 @dataclasses.dataclass
@@ -119,15 +125,19 @@ class DesignJournal:
 
 
 @dataclasses.dataclass
-class TidObjectives:
-    """The evaluation of one generation (picklable, for executors): X rows (b_t, k_t, c_t) →
-    F = (a_rm, a_sm), G = X/X0 − 1 for the four constrained indices. A failed run counts as
-    infeasible (G = ∞) with F = 10 × the uncontrolled values. ``designs`` keeps every
-    evaluated design's metrics (``None`` for a failed run) and journals them beside a
-    checkpoint."""
+class Objectives:
+    """The evaluation of one generation (picklable, for executors): X rows (the variables'
+    values, in the order of ``paths``) → F (the ``objectives``' indices), G = X/bound − 1 for
+    each ``(index, bound)`` of ``constraints`` (X − bound for a bound ≤ 0). A failed run counts
+    as infeasible (G = ∞) with F = ``failed``. ``designs`` keeps every evaluated design's
+    ``record`` indices (``None`` for a failed run) and journals them beside a checkpoint."""
 
     config: Config
-    baseline: dict
+    paths: tuple
+    objectives: tuple
+    constraints: tuple
+    record: tuple
+    failed: tuple
     threads: Optional[int] = None
     designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
     executor: object = None
@@ -136,20 +146,146 @@ class TidObjectives:
     def cache(self) -> dict:
         return self.designs.cache
 
+    def config_of(self, x) -> Config:
+        cfg = self.config.copy()
+        for p, v in zip(self.paths, x):
+            set_field(cfg, p, float(v))
+        cfg.output.indices = list(self.record)
+        return cfg
+
+    def fg(self, m: Optional[dict]) -> tuple:
+        """F and G of one run's recorded indices (``None``: a failed run)."""
+        if m is None:
+            return list(self.failed), [math.inf] * len(self.constraints)
+        return [m[k] for k in self.objectives], [m[k] / b - 1.0 if b > 0 else m[k] - b for k, b in self.constraints]
+
     def __call__(self, X: np.ndarray):
         X = np.asarray(X, dtype=float)
-        self.designs.run(X, lambda x: [case_config(self.config, *x)],
-                         lambda _, r: None if isinstance(r, BaseException) else {m: float(r[m]) for m in METRICS}, self.threads, self.executor)
-        F = np.empty((len(X), 2))
-        G = np.empty((len(X), len(CONSTRAINTS)))
+        self.designs.run(X, lambda x: [self.config_of(x)],
+                         lambda _, r: None if isinstance(r, BaseException) else {m: float(r[m]) for m in self.record}, self.threads, self.executor)
+        F = np.empty((len(X), len(self.objectives)))
+        G = np.empty((len(X), len(self.constraints)))
         for i, x in enumerate(X):
-            m = self.cache[tuple(x)][0]
-            if m is None:
-                F[i] = [10 * self.baseline["rail_acc_max"], 10 * self.baseline["slab_acc_max"]]
-                G[i] = np.inf
-                continue
-            F[i], G[i] = objectives(m, self.baseline)
+            F[i], G[i] = self.fg(self.cache[tuple(x)][0])
         return F, G
+
+
+def tid_objectives(config: Config, baseline: dict, threads: Optional[int] = None, executor=None) -> Objectives:
+    """The article's problem (:data:`ARTICLE_VARIABLES`, :data:`ARTICLE_OBJECTIVES`, the
+    :data:`CONSTRAINTS` against the uncontrolled ``baseline``), recording :data:`METRICS`; a
+    failed run scores 10 × the uncontrolled objectives."""
+    return Objectives(config, tuple(ARTICLE_VARIABLES), ARTICLE_OBJECTIVES, tuple((m, baseline[m]) for m in CONSTRAINTS), METRICS,
+                      tuple(10 * baseline[m] for m in ARTICLE_OBJECTIVES), threads, executor=executor)
+
+
+def _problem_spec(config: Config, variables, objectives, constraints, reference) -> tuple:
+    """Checked variables [(path, low, high, log)], objectives, constraints [(index, bound)]
+    and the reference run's indices (or None); every bad entry raises ConfigError naming it."""
+    if not isinstance(variables, dict) or not variables:
+        raise config_error("variables", variables, "must be a non-empty mapping {field path: (low, high, 'log' | 'linear')}")
+    spec = []
+    for path, bounds in variables.items():
+        get_field(_with_tids(config, path), path)
+        if not isinstance(bounds, (tuple, list)) or len(bounds) not in (2, 3):
+            raise config_error(f"variables[{path!r}]", bounds, "must be (low, high) or (low, high, 'log' | 'linear')")
+        lo, hi, scale = (*bounds, "linear") if len(bounds) == 2 else bounds
+        if scale not in ("log", "linear"):
+            raise config_error(f"variables[{path!r}]", scale, "the scale must be 'log' or 'linear'")
+        for v in (lo, hi):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise config_error(f"variables[{path!r}]", v, "bounds must be finite numbers")
+        if not lo < hi or (scale == "log" and lo <= 0):
+            raise config_error(f"variables[{path!r}]", (lo, hi), "needs low < high" + (" and low > 0 on a log scale" if scale == "log" else ""))
+        spec.append((path, float(lo), float(hi), scale == "log"))
+    names = index_names(config)
+    if isinstance(objectives, str) or not objectives:
+        raise config_error("objectives", objectives, "must be a non-empty list of index names")
+    for m in objectives:
+        if m not in names:
+            raise config_error("objectives", m, f"not an index of this configuration (known: {', '.join(names)})")
+    cons = []
+    for c in constraints or ():
+        if not isinstance(c, (tuple, list)) or len(c) != 2 or c[0] not in names:
+            raise config_error("constraints", c, f"each must be (index, bound) with an index of this configuration (known: {', '.join(names)})")
+        if not (c[1] == "reference" or (isinstance(c[1], (int, float)) and not isinstance(c[1], bool) and math.isfinite(c[1]))):
+            raise config_error("constraints", c, "the bound must be a finite number or 'reference'")
+        cons.append((c[0], c[1]))
+    ref = None
+    if reference is not None:
+        cfg = config.copy()
+        for path, value in reference.items():
+            set_field(cfg, path, value)
+        ref = simulate(cfg).metrics()
+    elif any(b == "reference" for _, b in cons):
+        raise config_error("reference", None, "a constraint bounded by 'reference' needs the reference run's fields, e.g. {'tids': None}")
+    cons = [(m, ref[m] if b == "reference" else float(b)) for m, b in cons]
+    return spec, tuple(objectives), tuple(cons), ref
+
+
+@dataclasses.dataclass
+class ParetoResult:
+    """The returned (feasible, non-dominated) designs of :func:`optimize` over user-named
+    variables: numpy columns in ``pareto`` — each variable by its path and every recorded index
+    (SI units) —, ``objectives`` and ``constraints`` as solved, the ``reference`` run's indices
+    (or None), the optimiser's :class:`vtb.moga.Result` and the ``config``."""
+
+    pareto: dict
+    variables: tuple
+    objectives: tuple
+    constraints: tuple
+    reference: Optional[dict]
+    moga: moga.Result
+    config: Config
+
+    def __len__(self) -> int:
+        return len(self.pareto[self.variables[0]])
+
+    def to_pandas(self):
+        """The designs as a DataFrame, one row each, units in ``attrs["units"]`` (needs pandas)."""
+        from .tables import frame, units_of
+
+        return frame(self.pareto, units_of(self.pareto))
+
+    def to_parquet(self, path) -> None:
+        """Parquet export of :meth:`to_pandas` (needs pyarrow)."""
+        from .tables import to_parquet
+
+        to_parquet(self.to_pandas(), path)
+
+
+def _optimize_fields(config, variables, objectives, constraints, reference, report, *, pop_size, n_gen, seed, algorithm, threads, executor,
+                     progress, stop_hv, checkpoint, **options) -> ParetoResult:
+    """:func:`optimize` over user-named variables and indices (see there)."""
+    spec, objectives, cons, ref = _problem_spec(config, variables, objectives, constraints, reference)
+    paths = tuple(p for p, *_ in spec)
+    base = config
+    if any(p.startswith("tids") for p in paths) and config.tids is None:
+        base = _with_tids(config, next(p for p in paths if p.startswith("tids")))
+    record = tuple(dict.fromkeys([*objectives, *(m for m, _ in cons), *(report or ())]))
+    names = index_names(config)
+    for m in record:
+        if m not in names:
+            raise config_error("report", m, f"not an index of this configuration (known: {', '.join(names)})")
+    failed = tuple(10 * abs(ref[m]) if ref and ref[m] else 1e300 for m in objectives)
+    evaluate = Objectives(base, paths, objectives, tuple(cons), record, failed, threads, executor=executor)
+    problem = moga.Problem(lower=[s[1] for s in spec], upper=[s[2] for s in spec], n_obj=len(objectives), n_constr=len(cons),
+                           evaluate=evaluate, log_scale=np.array([s[3] for s in spec]))
+    identity = checkpoint_identity(base, ref, paths=list(paths), objectives=list(objectives), constraints=[list(c) for c in cons], record=list(record))
+    if checkpoint is not None:
+        evaluate.designs.path = Path(str(checkpoint) + ".designs.jsonl")
+        evaluate.designs.load(identity)
+    hv_ref = tuple(ref[m] for m in objectives) if ref is not None and len(objectives) == 2 else None
+    res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=hv_ref,
+                        stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)
+    X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
+    missing = [x for x in X if tuple(x) not in evaluate.cache]
+    if missing:
+        evaluate(np.array(missing))
+    rows = [evaluate.cache[tuple(x)][0] for x in X]
+    pareto = {p: X[:, j] for j, p in enumerate(paths)}
+    pareto.update({m: np.array([r[m] for r in rows]) for m in record})
+    order = np.argsort(pareto[objectives[0]], kind="stable")
+    return ParetoResult({k: v[order] for k, v in pareto.items()}, paths, objectives, tuple(cons), ref, res, base)
 
 
 @dataclasses.dataclass
@@ -224,7 +360,7 @@ class OptimizationResult:
 def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config, baseline: dict) -> tuple:
     """The successful TID cases of a sweep (a :class:`~vtb.tid_sweep.SweepResult` or a journal
     path) as ``(X, F, G, metrics)`` of this optimisation: X rows (b_t, k_t, c_t), F and G as
-    :class:`TidObjectives` computes them against ``baseline``, and each case's metrics. The sweep
+    :func:`tid_objectives` computes them against ``baseline``, and each case's metrics. The sweep
     must be of ``config`` (same stamp) and its uncontrolled run must equal ``baseline``; the
     optimiser keeps the points within :data:`BOUNDS`."""
     sw = warm_start if isinstance(warm_start, SweepResult) else read_journal(warm_start, field="warm_start")
@@ -236,7 +372,7 @@ def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config,
     c, ok = sw.columns, np.flatnonzero(sw.controlled)
     X = np.column_stack([c["b_t"][ok], c["k_t"][ok], c["c_t"][ok]])
     metrics = [{m: float(c[m][i]) for m in METRICS} for i in ok]
-    FG = [objectives(r, baseline) for r in metrics]
+    FG = [tid_objectives(config, baseline).fg(r) for r in metrics]
     return X, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)), metrics
 
 
@@ -256,9 +392,27 @@ def optimize(
     samples=None,
     speeds=None,
     statistic: str = "mean",
+    variables: Optional[dict] = None,
+    objectives=None,
+    constraints=None,
+    reference: Optional[dict] = None,
+    report=None,
     **options,
-) -> OptimizationResult:
-    """Optimises the dampers of ``config`` (default :func:`vtb.tids_around`) for (a_rm, a_sm)
+) -> Union[OptimizationResult, ParetoResult]:
+    """**Over any fields and indices** (``variables`` given): minimises ``objectives`` (index
+    names, :func:`vtb.index_names`) over ``variables`` = {field path: (low, high, "log" |
+    "linear")} (paths as in :func:`vtb.study`) subject to ``constraints`` = [(index, bound)]
+    (X/bound − 1 ≤ 0; a bound ``"reference"`` is the index of the run with the ``reference``
+    fields set, e.g. ``{"tids": None}``); ``report`` names further indices to record for the
+    returned designs. Every name, path and bound is checked before any run. The budget,
+    algorithm, executor, ``stop_hv`` (two objectives and a reference run: its objectives are
+    the hypervolume's reference point) and ``checkpoint`` (with its designs journal) work as
+    below. Returns a :class:`ParetoResult`. The article's problem below is this one with
+    :data:`ARTICLE_VARIABLES`, :data:`ARTICLE_OBJECTIVES`, :data:`ARTICLE_CONSTRAINTS` and the
+    reference ``{"tids": None}``, and gives the same designs (tests/test_studies.py).
+
+    **The article's problem** (no ``variables``): optimises the dampers of ``config`` (default
+    :func:`vtb.tids_around`) for (a_rm, a_sm)
     under the article's constraints and bounds. ``algorithm``: ``"nsga2"`` or ``"gamultiobj"``
     (see :mod:`vtb.moga`); ``executor``: run each generation's designs as tasks on it
     (:mod:`vtb.scaleout`) instead of the in-process Rust batch; every design is journaled beside
@@ -289,6 +443,14 @@ def optimize(
     Returns a :class:`vtb.robust.RobustOptimizationResult`; ``warm_start`` must then be a
     :class:`vtb.robust.RobustSweep` of the same cases.
     """
+    if variables is not None:
+        if samples is not None or speeds is not None or warm_start is not None:
+            raise config_error("variables", list(variables), "samples, speeds and warm_start belong to the article's problem; a study over other fields runs one case")
+        return _optimize_fields(config, variables, objectives, constraints, reference, report, pop_size=pop_size, n_gen=n_gen, seed=seed,
+                                algorithm=algorithm, threads=threads, executor=executor, progress=progress, stop_hv=stop_hv,
+                                checkpoint=checkpoint, **options)
+    if objectives is not None or constraints is not None or reference is not None or report is not None:
+        raise config_error("variables", None, "objectives, constraints, reference and report need variables={path: (low, high, scale)}")
     if samples is not None or speeds is not None:
         from . import robust
 
@@ -303,7 +465,7 @@ def optimize(
     base_run = simulate(case_config(config, math.nan, 0, 0))
     baseline = base_run.metrics()
     # Executor workers run one case at a time each.
-    evaluate = TidObjectives(config, baseline, threads, executor=executor)
+    evaluate = tid_objectives(config, baseline, threads, executor)
     initial = None
     if warm_start is not None:
         X0, F0, G0, metrics = warm_start_points(warm_start, config, baseline)

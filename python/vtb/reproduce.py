@@ -184,7 +184,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
         car = {k: (mu[k], mc[k], (mu[k] - mc[k]) / mu[k]) for k in ("car_disp_max", "car_acc_max")}
         evidence["car_bands"] = _car_body_bands(unc, chosen)
     _report(out, quick, cfg, rows33, sweep_text, runs, table3, car, times, plan, resumed, bands, evidence, sw, chosen)
-    summary = dict(  # the chain's headline numbers, for studies built on it (vtb.study)
+    summary = dict(  # the chain's headline numbers, for studies built on it (vtb.robust_study)
         table_3_3=rows33, sweep_best=sw.best(), worst_slab_increase=sw.worst_slab_increase(),
         pinned_pinned_frequency=pinned_pinned_frequency(cfg), chosen=next((r for r in table3 if r["choice"] == "best η_r"), None),
         car=car, evidence={k: v for k, v in evidence.items() if k != "car_bands"}, times=times,

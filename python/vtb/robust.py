@@ -28,12 +28,14 @@ from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from . import journal as jr
 from . import moga, tid_sweep
 from .config import Config, TIDs
 from .errors import VtbError, config_error
 from .optimize import CONSTRAINTS, DesignJournal, OptimizationResult, checkpoint_identity, tid_problem
 from .presets import tids_around
 from .scaleout import run_all, run_cases
+from .studies import result_of
 from .tid_sweep import METRICS, case_config, config_stamp
 
 #: First seed of the samples a design is chosen on.
@@ -381,9 +383,9 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
             if out_dir is not None:
                 out_dir.mkdir(parents=True, exist_ok=True)
                 journal = out_dir / f"v{v:g}_seed{s}.csv"
-                stack.enter_context(tid_sweep._journal_lock(journal))
-                known = tid_sweep._open_journal(journal, cfg)
-            rows, left = tid_sweep.reuse(known, grid_cases)
+                stack.enter_context(jr.lock(journal))
+                known = jr.open_rows(journal, cfg, tid_sweep.LAYOUT)
+            rows, left = jr.reuse(known, grid_cases, tid_sweep.LAYOUT)
             state.append([v, s, cfg, journal, rows, left])
         total = len(todo) * len(grid_cases)
         done = total - sum(len(st[5]) for st in state)
@@ -403,7 +405,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 st, case = jobs[i]
                 row = tid_sweep.case_rows([case], [r])
                 if st[3] is not None:
-                    tid_sweep._append_rows(st[3], row)
+                    jr.append(st[3], row, tid_sweep.LAYOUT)
                 st[4].extend(row)
                 done += 1
                 if bar is not None:
@@ -411,8 +413,8 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 if report is not None:
                     report(done, total)
 
-            run_cases([case_config(st[2], b, k, c) for st, (_, b, k, c) in jobs], finished, executor=executor, threads=threads, chunk=chunk)
-    return RobustSweep([(v, s, tid_sweep._result(rows, cfg)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
+            run_cases([case_config(st[2], c["b_t"], c["k_t"], c["c_t"]) for st, c in jobs], finished, executor=executor, threads=threads, chunk=chunk)
+    return RobustSweep([(v, s, result_of(rows, cfg, tid_sweep.LAYOUT, tid_sweep.SweepResult)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
 
 
 # ---------------------------------------------------------------------- robust optimisation

@@ -1,40 +1,35 @@
 """The TID parameter sweep of the article (§4.2–4.3, docs/model.md §9) and its analyses.
 
 ``vtb.sweep(config)`` runs the uncontrolled baseline and the Cartesian grid of (b_t, k_t, c_t)
-with the dampers of ``config.tids`` (default :func:`vtb.tids_around`), in parallel in Rust or
-through any :class:`concurrent.futures.Executor`. With ``out=`` finished cases are appended to a
-CSV journal as each lockstep group completes; re-running with the same path skips them.
-
-The journal: line 1 is its stamp, ``# vtb sweep journal {"config": {...}, "format": 1}`` (the
-swept configuration as JSON), line 2 the CSV header :data:`JOURNAL_COLUMNS`, then one row per
-finished run keyed by its parameters (b_t, k_t, c_t; ``nan`` for the uncontrolled baseline),
-not by a case number, so that a changed grid reuses every row it shares. See :func:`sweep`.
+with the dampers of ``config.tids`` (default :func:`vtb.tids_around`): the study of
+:func:`vtb.study` over the aliases ``b_t, k_t, c_t`` with the uncontrolled run (``tids =
+None``) as its reference case and the indices :data:`METRICS`. With ``out=`` finished cases
+are appended to a CSV journal (:mod:`vtb.journal`) as each lockstep group completes;
+re-running with the same path skips them. Rows are keyed by their parameters (``nan`` for the
+baseline), not by a case number, so that a changed grid reuses every row it shares.
 """
 
 from __future__ import annotations
 
-import contextlib
-import csv
 import dataclasses
-import io
-import json
 import math
 import numbers
 import os
-import socket
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import Optional, Sequence, Union
 
 import numpy as np
 
+from . import journal as jr
 from .config import Config
-from .errors import ConfigError, VtbError, config_error
-from .moga import write_atomically
+from .errors import VtbError, config_error
+from .journal import config_stamp
 from .presets import tids_around
 from .resolution import pinned_pinned_frequency
-from .scaleout import run_cases
-from .tables import units_of
+from .studies import StudyResult, result_of, rows_of, study
+
+__all__ = ["sweep", "SweepResult", "config_stamp", "pinned_pinned_frequency"]
 
 #: The article's grid: b_t = 1..10 kg; k_t = 1..9 × 10^4..10^8 and 1e9 N/m; c_t = 10..1e4 N·s/m.
 ARTICLE_B = tuple(float(b) for b in range(1, 11))
@@ -48,34 +43,30 @@ METRICS = (
     "car_acc_max", "car_acc_rms", "car_disp_max", "contact_force_max", "contact_force_min",
     "contact_loss_events",
 )
-COLUMNS = ("case", "b_t", "k_t", "c_t") + METRICS + ("error",)
+#: The journal's layout: the parameters (keys) and :data:`METRICS`.
+LAYOUT = jr.Layout(("b_t", "k_t", "c_t"), METRICS)
+COLUMNS = ("case",) + LAYOUT.columns
 #: The columns of a sweep journal: those of a result but the case number (rows are keyed by
 #: their parameters).
-JOURNAL_COLUMNS = COLUMNS[1:]
-JOURNAL_FORMAT = 1
-_STAMP = "# vtb sweep journal "
+JOURNAL_COLUMNS = LAYOUT.columns
+#: The uncontrolled reference case: the structure without dampers.
+REFERENCE = {"tids": None}
 
 
 @dataclasses.dataclass
-class SweepResult:
-    """A finished sweep: numpy columns ``case`` (0 = the uncontrolled baseline), ``b_t`` (kg),
+class SweepResult(StudyResult):
+    """A finished sweep (a :class:`vtb.studies.StudyResult` over b_t, k_t, c_t): numpy columns ``case`` (0 = the uncontrolled baseline), ``b_t`` (kg),
     ``k_t`` (N/m), ``c_t`` (N·s/m) (NaN for the baseline), every metric of :data:`METRICS`
     (SI units; NaN where the case failed) and ``error`` (empty, or the failure's type and
     message). ``config``: the swept configuration (its ``tids`` give count and positions)."""
 
-    columns: dict
-    config: Config
-
-    def __len__(self) -> int:
-        return len(self.columns["case"])
+    variables: tuple = LAYOUT.keys
+    indices: tuple = METRICS
 
     @property
     def baseline(self) -> dict:
         """Metrics of the uncontrolled run (case 0)."""
-        i = np.flatnonzero(self.columns["case"] == 0)
-        if i.size == 0 or self.columns["error"][i[0]]:
-            raise VtbError("the sweep has no successful uncontrolled run (case 0): " + (str(self.columns["error"][i[0]]) if i.size else "missing"))
-        return {k: float(self.columns[k][i[0]]) for k in METRICS}
+        return self.reference
 
     def _require_controlled(self) -> np.ndarray:
         ok = self.controlled
@@ -87,22 +78,6 @@ class SweepResult:
     def controlled(self) -> np.ndarray:
         """Boolean mask of the successful TID cases."""
         return (self.columns["case"] > 0) & (self.columns["error"] == "")
-
-    def to_pandas(self):
-        """The columns as a DataFrame, metric units in ``attrs["units"]`` (needs pandas)."""
-        from .tables import frame
-
-        return frame(self.columns, units_of(self.columns))
-
-    def to_csv(self, path) -> None:
-        """CSV export of the columns (with the case numbers; not a journal)."""
-        Path(path).write_text(_csv_text([dict(zip(COLUMNS, row)) for row in zip(*(self.columns[c] for c in COLUMNS))], COLUMNS, header=True))
-
-    def to_parquet(self, path) -> None:
-        """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
-        from .tables import to_parquet
-
-        to_parquet(self.to_pandas(), path)
 
     # ------------------------------------------------------------------ analyses
     def best_per_inertance(self) -> dict:
@@ -129,10 +104,11 @@ class SweepResult:
             ))
         return {k: np.array([r[k] for r in rows]) for k in (rows[0] if rows else {})}
 
-    def best(self) -> dict:
-        """The case with the lowest a_rm overall, with its reduction against the baseline."""
+    def best(self, index: str = "rail_acc_max") -> dict:
+        """The case with the lowest a_rm (or ``index``) overall, with the reduction of a_rm
+        against the baseline and the dampers' working frequency."""
         c, ok = self.columns, self._require_controlled()
-        i = np.flatnonzero(ok)[np.argmin(c["rail_acc_max"][ok])]
+        i = np.flatnonzero(ok)[np.argmin(c[index][ok])]
         out = {k: float(c[k][i]) for k in ("b_t", "k_t", "c_t") + METRICS}
         out["eta_rail_acc_max"] = 1 - out["rail_acc_max"] / self.baseline["rail_acc_max"]
         out["working_frequency"] = math.sqrt(out["k_t"] / out["b_t"]) / (2 * math.pi)
@@ -174,29 +150,14 @@ def case_config(config: Config, b: float, k: float, c: float) -> Config:
 
 
 def case_rows(cases: list, results: list) -> list:
-    """The journal rows of cases [(case, b, k, c)] from their runs (metrics or exceptions)."""
-    rows = []
-    for (case, b, k, c), r in zip(cases, results):
-        row = {"case": case, "b_t": b, "k_t": k, "c_t": c}
-        if isinstance(r, BaseException):
-            row.update({m: math.nan for m in METRICS}, error=" ".join(f"{type(r).__name__}: {r}".split()))
-        else:
-            row.update({m: float(r[m]) for m in METRICS}, error="")
-        rows.append(row)
-    return rows
-
-
-def _run_cases(config: Config, cases: list, threads: Optional[int], on_rows, executor=None, chunk: Optional[int] = None) -> None:
-    """Runs cases [(case, b, k, c)] (:func:`vtb.scaleout.run_cases`), handing each finished
-    case's journal row to ``on_rows([row])`` as soon as it is known."""
-    run_cases([case_config(config, b, k, c) for _, b, k, c in cases], lambda i, r: on_rows(case_rows([cases[i]], [r])),
-              executor=executor, threads=threads, chunk=chunk)
+    """The journal rows of cases (dicts: ``case``, b_t, k_t, c_t) from their runs."""
+    return rows_of(cases, results, LAYOUT)
 
 
 def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> tuple:
-    """The swept configuration (dampers default :func:`vtb.tids_around`) and its cases, the
-    baseline (case 0, NaN parameters) and the grid; a bad grid value raises a
-    :class:`ConfigError` naming b_t, k_t or c_t before any run."""
+    """The swept configuration (dampers default :func:`vtb.tids_around`) and its cases (dicts:
+    ``case``, b_t, k_t, c_t), the baseline (case 0, NaN parameters) and the grid; a bad grid
+    value raises a :class:`ConfigError` naming b_t, k_t or c_t before any run."""
     for name, vals, low in (("b_t", b_t, 0.0), ("k_t", k_t, 0.0), ("c_t", c_t, None)):
         if len(vals) == 0:
             raise config_error(name, list(vals), "needs at least one value")
@@ -207,156 +168,8 @@ def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequen
     if config.tids is None:
         config = config.copy()
         config.tids = tids_around(config)
-    cases = [(0, math.nan, math.nan, math.nan)] + grid(b_t, k_t, c_t)
-    for _, b, k, c in cases[1:2]:
-        case_config(config, b, k, c).validate()
+    cases = [dict(case=i, b_t=b, k_t=k, c_t=c) for i, b, k, c in [(0, math.nan, math.nan, math.nan)] + grid(b_t, k_t, c_t)]
     return config, cases
-
-
-def reuse(known: dict, cases: list) -> tuple:
-    """The successful journal rows of ``cases`` (renumbered) and the cases still to run."""
-    rows = []
-    for case, b, k, c in cases:
-        row = known.get(_key(b, k, c))
-        if row is not None and not row["error"]:
-            rows.append(dict(row, case=case))
-    reused = {r["case"] for r in rows}
-    return rows, [c for c in cases if c[0] not in reused]
-
-
-def config_stamp(config: Config) -> str:
-    """The configuration as canonical JSON: what a journal is stamped with and what a warm start
-    and a checkpoint of :func:`vtb.optimize` are checked against."""
-    return json.dumps(config.to_dict(), sort_keys=True)
-
-
-def _key(b: float, k: float, c: float):
-    """A run's journal key: its parameters, ``None`` for the baseline (no dampers)."""
-    return None if math.isnan(b) else (b, k, c)
-
-
-def _csv_text(rows: list, columns: tuple, header: bool = False) -> str:
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
-    if header:
-        w.writeheader()
-    for r in rows:
-        w.writerow({k: (r[k] if k in ("case", "error") else repr(float(r[k]))) for k in columns})
-    return buf.getvalue()
-
-
-def _append_rows(journal: Path, rows: list) -> None:
-    with open(journal, "a", newline="") as f:
-        f.write(_csv_text(rows, JOURNAL_COLUMNS))
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _drop_partial_line(path: Path) -> None:
-    """Cuts a last line left without its newline by a kill, so that appends stay rows."""
-    data = path.read_bytes()
-    if data and not data.endswith(b"\n"):
-        with open(path, "r+b") as f:
-            f.truncate(data.rfind(b"\n") + 1)
-
-
-def _parse_journal(path: Path, field: str):
-    """The stamp's configuration (``None`` for an empty file) and the journal's rows by key.
-
-    Of several rows with one key the last successful one wins, or the last one when all failed.
-    A last line without its newline (a write cut short) is ignored; anything else malformed
-    raises a :class:`ConfigError` naming ``field`` and the line number.
-    """
-    data = path.read_bytes()
-    try:
-        lines = data[: data.rfind(b"\n") + 1].decode("utf-8").split("\n")[:-1]
-    except UnicodeDecodeError as e:
-        raise config_error(field, str(path), f"is not a vtb sweep journal (not UTF-8 text: {e})") from None
-    if not lines:
-        return None, {}
-
-    def bad(line: int, reason: str) -> ConfigError:
-        return config_error(field, str(path), f"line {line}: {reason}")
-
-    if not lines[0].startswith(_STAMP):
-        raise bad(1, f"not a vtb sweep journal (its first line must be the stamp {_STAMP.strip()!r} + JSON); choose another path")
-    try:
-        stamp = json.loads(lines[0][len(_STAMP):])
-        fmt, config = stamp["format"], Config.from_dict(stamp["config"])
-    except (ValueError, KeyError, TypeError) as e:  # ConfigError is a ValueError
-        raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
-    if fmt != JOURNAL_FORMAT:
-        raise bad(1, f"journal format {fmt!r}; this vtb reads format {JOURNAL_FORMAT}")
-    if next(csv.reader(lines[1:2]), None) != list(JOURNAL_COLUMNS):
-        raise bad(2, f"the header must be {','.join(JOURNAL_COLUMNS)}")
-    rows = {}
-    for number, fields in enumerate(csv.reader(lines[2:]), start=3):
-        if len(fields) != len(JOURNAL_COLUMNS):
-            raise bad(number, f"{len(fields)} fields, expected {len(JOURNAL_COLUMNS)}")
-        row = {"error": fields[-1]}
-        for name, text in zip(JOURNAL_COLUMNS[:-1], fields):
-            try:
-                row[name] = float(text)
-            except ValueError:
-                raise bad(number, f"{name} = {text!r} is not a number") from None
-        params = [row["b_t"], row["k_t"], row["c_t"]]
-        if not (all(math.isnan(v) for v in params) or all(math.isfinite(v) for v in params)):
-            raise bad(number, f"(b_t, k_t, c_t) = {params} must be three numbers, or three nan for the baseline")
-        key = _key(*params)
-        if not row["error"] or key not in rows or rows[key]["error"]:
-            rows[key] = row
-    return config, rows
-
-
-@contextlib.contextmanager
-def _journal_lock(journal: Path):
-    """Holds ``<journal>.lock`` for a whole sweep. The lock is an exclusive ``fcntl.flock`` on
-    that file, which the kernel releases when its process dies: the file a killed sweep leaves
-    behind is then free again, so stale locks need no clean-up. The holder writes its pid and
-    host into the file for the message of a sweep refused meanwhile."""
-    import fcntl  # POSIX only
-
-    path = journal.with_name(journal.name + ".lock")
-    while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 200, 0).decode(errors="replace").strip()
-            os.close(fd)
-            raise config_error("out", str(journal), f"is in use by another sweep ({holder or 'pid not yet written'}; lock file {path})") from None
-        # the holder may have removed the file between our open and our lock: lock the new one
-        try:
-            if os.stat(path).st_ino == os.fstat(fd).st_ino:
-                break
-        except FileNotFoundError:
-            pass
-        os.close(fd)
-    try:
-        os.ftruncate(fd, 0)
-        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
-        yield
-    finally:
-        path.unlink(missing_ok=True)  # still locked: nobody can take the unlinked file unnoticed
-        os.close(fd)
-
-
-def _open_journal(journal: Path, config: Config) -> dict:
-    """The rows of the journal of ``config`` by key, creating the journal if absent or empty;
-    refuses one of another configuration. Call it with the lock held."""
-    if journal.exists():
-        _drop_partial_line(journal)
-        stamped, rows = _parse_journal(journal, "out")
-    else:
-        stamped, rows = None, {}
-    stamp = config_stamp(config)
-    if stamped is None:
-        first = _STAMP + json.dumps({"format": JOURNAL_FORMAT, "config": json.loads(stamp)}, sort_keys=True) + "\n"
-        write_atomically(journal, lambda f: f.write((first + _csv_text([], JOURNAL_COLUMNS, header=True)).encode()))
-        return {}
-    if config_stamp(stamped) != stamp:
-        raise config_error("out", str(journal), "line 1: holds a sweep of another configuration; choose another path")
-    return rows
 
 
 def read_journal(path: Union[str, Path], field: str = "path") -> SweepResult:
@@ -367,19 +180,12 @@ def read_journal(path: Union[str, Path], field: str = "path") -> SweepResult:
     path = Path(path)
     if not path.is_file():
         raise config_error(field, str(path), "no such sweep journal")
-    config, rows = _parse_journal(path, field)
+    config, _, rows = jr.parse(path, field, LAYOUT)
     if config is None:
         raise config_error(field, str(path), "is an empty file, not a sweep journal")
     ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the baseline first (stable)
     start = 0 if ordered and ordered[0][0] is None else 1
-    return _result([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config)
-
-
-def _result(rows: list, config: Config) -> SweepResult:
-    rows = sorted(rows, key=lambda r: r["case"])
-    columns = {k: np.array([r[k] for r in rows], dtype=str if k == "error" else float) for k in COLUMNS}
-    columns["case"] = columns["case"].astype(int)
-    return SweepResult(columns=columns, config=config)
+    return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, LAYOUT, SweepResult)
 
 
 def sweep(
@@ -438,42 +244,9 @@ def sweep(
 
         return robust.sweep_over(config, b_t, k_t, c_t, samples=samples, speeds=speeds, statistic_name=statistic, out=out, threads=threads,
                                  progress=progress, executor=executor, chunk=chunk)
-    config, cases = plan(config, b_t, k_t, c_t)
-    journal = None
-    if out is not None:
-        out = Path(out)
-        journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
-        journal.parent.mkdir(parents=True, exist_ok=True)
-    with _journal_lock(journal) if journal is not None else contextlib.nullcontext():
-        rows, todo = reuse(_open_journal(journal, config) if journal is not None else {}, cases)
-        total, done = len(cases), len(rows)
-        bar, report = None, None
-        if progress is True:
-            from tqdm.auto import tqdm
-
-            bar = tqdm(total=total, initial=done, desc="vtb sweep", unit="run")
-        elif callable(progress):
-            report = progress
-        def finish(new_rows):
-            nonlocal done
-            rows.extend(new_rows)
-            if journal is not None:
-                _append_rows(journal, new_rows)
-            done += len(new_rows)
-            if bar is not None:
-                bar.update(len(new_rows))
-            if report is not None:
-                report(done, total)
-
-        try:
-            _run_cases(config, todo, threads, finish, executor, chunk)
-        finally:
-            if bar is not None:
-                bar.close()
-    result = _result(rows, config)
-    if out is not None and out.suffix == ".parquet":
-        result.to_parquet(out)
-    return result
+    config, _ = plan(config, b_t, k_t, c_t)
+    return study(config, {"b_t": b_t, "k_t": k_t, "c_t": c_t}, reference=REFERENCE, indices=METRICS, out=out, executor=executor,
+                 threads=threads, chunk=chunk, progress=progress, desc="vtb sweep", result_class=SweepResult)
 
 
 #: The article's best sweep case's cut of the rail acceleration amplitude (1005.6 → 841.0 m/s²).
