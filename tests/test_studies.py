@@ -182,3 +182,24 @@ def test_any_text_as_a_path_is_a_field_or_a_config_error(path):
         vtb.get_field(cfg, path)
     except vtb.ConfigError:
         pass
+
+
+def test_ride_comfort_is_a_core_index_equal_to_vtb_comfort(short):
+    """car_comfort_aw (ISO 2631-1 a_w, computed in the core) against vtb.comfort's SciPy filter
+    on the same record, over the whole run and over a window; a study can name it."""
+    import warnings
+
+    cfg = short.copy()
+    cfg.tids = None
+    r = vtb.simulate(cfg)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.comfort.ComfortWarning)
+        whole = r.comfort()["a_w"]
+        part = r.comfort(window=(0.020025, 0.090025))["a_w"]
+    assert r.metrics()["car_comfort_aw"] == pytest.approx(whole, rel=1e-8)
+    cfg.output.window = [0.020025, 0.090025]
+    assert vtb.simulate(cfg).metrics()["car_comfort_aw"] == pytest.approx(part, rel=1e-8)
+    s = vtb.study(short, {"speed": [80.0]}, indices=["car_comfort_aw", "bridge_acc_max"], progress=False)
+    one = vtb.simulate(short).metrics()
+    assert s.columns["car_comfort_aw"][0] == one["car_comfort_aw"] and s.columns["bridge_acc_max"][0] == one["bridge_acc_max"]
+    assert vtb.metric_unit("car_comfort_aw") == "m/s²"

@@ -14,6 +14,7 @@
 pub mod banded;
 pub mod basis;
 pub mod budget;
+pub mod comfort;
 pub mod config;
 pub mod contact;
 pub mod couplings;

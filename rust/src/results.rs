@@ -13,6 +13,8 @@ const LAYER_INDICES: [&str; 4] = ["disp_max", "acc_max", "acc_rms", "acc_settle"
 const RAW_PEAK: &str = "acc_max_raw";
 /// The first car's indices.
 const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
+/// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::comfort`]).
+const COMFORT: &str = "car_comfort_aw";
 /// The wheels' indices.
 const CONTACT_INDICES: [&str; 3] = ["contact_force_max", "contact_force_min", "contact_loss_events"];
 
@@ -27,6 +29,9 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
     }
     if !cfg.vehicles.is_empty() {
         out.extend(CAR_INDICES.map(String::from));
+        if 1.0 / cfg.solver.dt >= crate::comfort::MIN_RATE {
+            out.push(COMFORT.to_string());
+        }
         out.extend(CONTACT_INDICES.map(String::from));
     }
     out
@@ -169,7 +174,8 @@ impl RunResult {
 
     /// Metrics in SI units at the first observation point: for every layer
     /// `{name}_disp_max`, `{name}_acc_max`, `{name}_acc_rms`, `{name}_acc_settle` (s, 5 %
-    /// rule); for the first car `car_disp_max`, `car_acc_max`, `car_acc_rms`; and
+    /// rule); for the first car `car_disp_max`, `car_acc_max`, `car_acc_rms` and its ride
+    /// comfort `car_comfort_aw` (ISO 2631-1 a_w of the raw record, at sampling rates ≥ 400 Hz); and
     /// `contact_force_max`, `contact_force_min`, `contact_loss_events`.
     ///
     /// With an analysis window ([`RunResult::window`]) every metric is taken over the steps
@@ -210,6 +216,12 @@ impl RunResult {
             let a = &limited(self.vehicle_dof_acc(0, 0))[steps.clone()];
             for (s, v) in CAR_INDICES.iter().zip([amplitude(d), amplitude(a), rms(a)]) {
                 m.insert(s.to_string(), v);
+            }
+            let wanted = self.indices.as_ref().is_none_or(|k| k.iter().any(|n| n == COMFORT));
+            if wanted && 1.0 / self.dt >= crate::comfort::MIN_RATE {
+                // weighted from the window's start, as vtb.comfort weights a windowed record
+                let raw = &self.vehicle_dof_acc(0, 0)[steps.clone()];
+                m.insert(COMFORT.to_string(), crate::comfort::weighted_rms(raw, self.dt));
             }
         }
         if self.n_wheels > 0 {
