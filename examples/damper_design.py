@@ -2,7 +2,7 @@
 best design, and a check of that design on an irregularity sample it was not chosen on. It
 runs on the fast converged model (the converged finite elements by complex-modal synthesis),
 the model the README recommends for damper design; the first run builds and caches its
-reduction (about 2.5 minutes).
+reduction (161 s on a 2-core machine, docs/synthesis-verification.md).
 
     python examples/damper_design.py
 """

@@ -2,6 +2,10 @@
 
 Runs the four speeds as one batch (the core groups and parallelises them) and prints the rail,
 slab and car-body responses at mid-span with their units, and the car body's ride comfort.
+It runs the article's own model, which the README's table trusts for rail and slab
+displacements; its rail acceleration is the article's index, not converged in the rail's
+0.3–2 kHz band (docs/resolution.md). For rail vibration use ``vtb.paper_config(model="fast")``,
+with the rail refined below 80 m/s so that v/h stays above 2.5 kHz (docs/track-models.md).
 
     python examples/speed_study.py [--out DIR]     # DIR: also write fig_speed_study.png/.pdf
 """
