@@ -30,7 +30,7 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["comfort_check.py", "damper_design.py", "receptance_check.py", "speed_study.py"]
+    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "receptance_check.py", "speed_study.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
 
@@ -41,6 +41,19 @@ def test_speed_study_example(tmp_path):
     assert [float(r[0]) for r in rows] == [60.0, 70.0, 80.0, 90.0]
     assert all(float(r[1]) > 0 for r in rows)
     assert (tmp_path / "fig_speed_study.pdf").exists()
+
+
+def test_any_study_example_is_ten_lines_and_runs_every_case():
+    code = [line for line in (EXAMPLES / "any_study.py").read_text().split('"""')[2].splitlines() if line.strip()]
+    assert len(code) <= 10
+    text = _run("any_study.py")
+    lines = text.splitlines()
+    assert lines[0].split() == ["case", "speed", "tids.k_t", "rail_acc_max", "bridge_acc_max", "car_comfort_aw"]
+    rows = [line.split() for line in lines[1:6]]
+    assert [r[0] for r in rows] == ["0", "1", "2", "3", "4"]
+    assert [r[1] for r in rows] == ["NaN", "70", "70", "80", "80"] and [r[2] for r in rows] == ["NaN", "1e+08", "2e+08", "1e+08", "2e+08"]
+    assert all(float(v) > 0 for r in rows for v in r[3:])
+    assert lines[6].startswith("lowest a_rm:")
 
 
 def test_damper_design_example():
