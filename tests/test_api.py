@@ -196,3 +196,29 @@ def test_an_attribute_typo_names_its_full_dotted_path(target, name, path):
     with pytest.raises(vtb.ConfigError) as e:
         setattr(target(vtb.paper_config()), name, 1)
     assert e.value.field == path
+
+
+def test_a_single_run_reports_its_steps_and_stops_on_ctrl_c_within_a_second(default_sigint):
+    """A single converged run (the slowest model, ≈ 70 000 steps) reports its progress in steps
+    and SIGINT 3 s into it raises KeyboardInterrupt within 1 s of the signal."""
+    cfg = vtb.paper_config(model="converged")
+    seen, sent = [], []
+
+    def interrupt():
+        sent.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(3.0, interrupt)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        vtb.simulate(cfg, progress=lambda done, total: seen.append((done, total)))
+    assert sent and time.perf_counter() - sent[0] < 1.0
+    moving = [(d, t) for d, t in seen if t]
+    assert len(moving) >= 5 and len({t for _, t in moving}) == 1 and moving[0][1] > 60_000
+    done = [d for d, _ in moving]
+    assert done == sorted(done) and done[-1] > done[0]
+
+
+def test_a_single_runs_progress_argument_is_checked():
+    with pytest.raises(vtb.ConfigError, match="progress"):
+        vtb.simulate(vtb.paper_config(), progress="yes")

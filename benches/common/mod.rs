@@ -29,7 +29,8 @@ pub fn machine_load() -> String {
         .ok()
         .and_then(|s| {
             let v: Vec<&str> = s.split_whitespace().take(3).collect();
-            (v.len() == 3).then(|| format!("load average {} {} {} (1, 5, 15 min)", v[0], v[1], v[2]))
+            (v.len() == 3)
+                .then(|| format!("load average {} {} {} (1, 5, 15 min)", v[0], v[1], v[2]))
         })
         .unwrap_or_else(|| "load unknown".into())
 }

@@ -87,9 +87,20 @@ mod tests {
     /// band centres 10^(n/10) Hz), against the closed form.
     #[test]
     fn the_analogue_weighting_matches_the_standards_table() {
-        for (n, table) in [(0, 0.482), (6, 0.967), (9, 1.036), (12, 0.768), (15, 0.405), (18, 0.186)] {
+        for (n, table) in [
+            (0, 0.482),
+            (6, 0.967),
+            (9, 1.036),
+            (12, 0.768),
+            (15, 0.405),
+            (18, 0.186),
+        ] {
             let f = 10f64.powf(n as f64 / 10.0);
-            assert!((wk(f) / table - 1.0).abs() < 0.02, "f = {f}: {} vs {table}", wk(f));
+            assert!(
+                (wk(f) / table - 1.0).abs() < 0.02,
+                "f = {f}: {} vs {table}",
+                wk(f)
+            );
         }
     }
 
@@ -100,11 +111,17 @@ mod tests {
         let dt = 5e-5;
         for f in [0.8f64, 2.0, 5.0, 12.5, 40.0, 100.0] {
             let n = ((20.0 / f).max(2.0) / dt) as usize;
-            let x: Vec<f64> = (0..n).map(|i| (2.0 * PI * f * i as f64 * dt).sin()).collect();
+            let x: Vec<f64> = (0..n)
+                .map(|i| (2.0 * PI * f * i as f64 * dt).sin())
+                .collect();
             let y = weight(&x, dt);
             let tail = &y[n / 2..];
             let amp = (2.0f64 * tail.iter().map(|v| v * v).sum::<f64>() / tail.len() as f64).sqrt();
-            assert!((amp / wk(f) - 1.0).abs() < 0.01, "f = {f}: {amp} vs {}", wk(f));
+            assert!(
+                (amp / wk(f) - 1.0).abs() < 0.01,
+                "f = {f}: {amp} vs {}",
+                wk(f)
+            );
         }
     }
 }

@@ -1045,7 +1045,10 @@ impl Config {
                     return Err(VtbError::config(
                         format!("output.indices[{i}]"),
                         n,
-                        format!("is not an index of this configuration; it has {}", known.join(", ")),
+                        format!(
+                            "is not an index of this configuration; it has {}",
+                            known.join(", ")
+                        ),
                     ));
                 }
             }

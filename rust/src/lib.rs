@@ -41,5 +41,6 @@ pub use error::{Result, VtbError};
 pub use model::Model;
 pub use results::{Record, RunResult};
 pub use simulate::{
-    BatchOptions, Job, Sink, run_batch, run_batch_each, run_batch_with, simulate, simulate_with,
+    BatchOptions, Control, Job, Sink, run_batch, run_batch_each, run_batch_with, simulate,
+    simulate_with,
 };

@@ -16,7 +16,11 @@ const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
 /// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::comfort`]).
 const COMFORT: &str = "car_comfort_aw";
 /// The wheels' indices.
-const CONTACT_INDICES: [&str; 3] = ["contact_force_max", "contact_force_min", "contact_loss_events"];
+const CONTACT_INDICES: [&str; 3] = [
+    "contact_force_max",
+    "contact_force_min",
+    "contact_loss_events",
+];
 
 /// Every index a run of `cfg` can report (`output.indices` names a subset of these).
 pub fn index_names(cfg: &Config) -> Vec<String> {
@@ -217,11 +221,17 @@ impl RunResult {
             for (s, v) in CAR_INDICES.iter().zip([amplitude(d), amplitude(a), rms(a)]) {
                 m.insert(s.to_string(), v);
             }
-            let wanted = self.indices.as_ref().is_none_or(|k| k.iter().any(|n| n == COMFORT));
+            let wanted = self
+                .indices
+                .as_ref()
+                .is_none_or(|k| k.iter().any(|n| n == COMFORT));
             if wanted && 1.0 / self.dt >= crate::comfort::MIN_RATE {
                 // weighted from the window's start, as vtb.comfort weights a windowed record
                 let raw = &self.vehicle_dof_acc(0, 0)[steps.clone()];
-                m.insert(COMFORT.to_string(), crate::comfort::weighted_rms(raw, self.dt));
+                m.insert(
+                    COMFORT.to_string(),
+                    crate::comfort::weighted_rms(raw, self.dt),
+                );
             }
         }
         if self.n_wheels > 0 {

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Validates, assembles and integrates one configuration.
-pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&Control>) -> Result<RunResult> {
     simulate_with(cfg, profile, None, cancel)
 }
 
@@ -28,7 +28,7 @@ pub fn simulate_with(
     cfg: &Config,
     profile: &Profile,
     reduction: Option<&Reduction>,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
 ) -> Result<RunResult> {
     let model = Model::new(cfg.clone(), profile.clone())?;
     match engine(cfg, reduction)? {
@@ -60,6 +60,48 @@ fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&
             "a reduction was given for a configuration that does not ask for the synthesis",
         )),
     }
+}
+
+/// What the caller of a run sees and steers while it runs, from another thread: the cancel
+/// flag, polled every [`CANCEL_POLL`] steps, and at each poll the steps done of the run's total
+/// (for a progress bar).
+#[derive(Debug, Default)]
+pub struct Control {
+    cancel: AtomicBool,
+    done: AtomicUsize,
+    total: AtomicUsize,
+}
+
+impl Control {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Asks the run to stop at its next poll (it ends with [`VtbError::Cancelled`]).
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
+    /// (steps done, steps in all) at the last poll; (0, 0) before the first.
+    pub fn progress(&self) -> (usize, usize) {
+        (
+            self.done.load(Ordering::Relaxed),
+            self.total.load(Ordering::Relaxed),
+        )
+    }
+}
+
+/// A run's poll at `step` of `total`: notes its progress and says whether to stop.
+pub(crate) fn poll(control: Option<&Control>, step: usize, total: usize) -> bool {
+    control.is_some_and(|c| {
+        c.done.store(step, Ordering::Relaxed);
+        c.total.store(total, Ordering::Relaxed);
+        c.cancelled()
+    })
 }
 
 /// Steps between polls of the cancel flag (well under a second on every model).
@@ -159,7 +201,7 @@ impl Default for BatchOptions {
 pub fn run_batch(
     jobs: &[Job],
     opts: BatchOptions,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
     done: Option<&AtomicUsize>,
 ) -> Vec<Result<RunResult>> {
     run_batch_with(jobs, opts, None, cancel, done)
@@ -171,7 +213,7 @@ pub fn run_batch_with(
     jobs: &[Job],
     opts: BatchOptions,
     reduction: Option<&Reduction>,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
     done: Option<&AtomicUsize>,
 ) -> Vec<Result<RunResult>> {
     let out: Mutex<Vec<Option<Result<RunResult>>>> =
@@ -202,7 +244,7 @@ pub fn run_batch_each(
     jobs: &[Job],
     opts: BatchOptions,
     reduction: Option<&Reduction>,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
     sink: Sink,
 ) {
     let record = opts.record;
@@ -227,7 +269,7 @@ pub fn run_batch_each(
     if !refused.is_empty() {
         sink(refused);
     }
-    let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    let cancelled = || cancel.is_some_and(Control::cancelled);
     let threads = rayon::current_num_threads();
     groups.par_iter().for_each(|members| {
         let first = &jobs[members[0]];
@@ -261,7 +303,7 @@ fn run_lanes(
     chunk: &[usize],
     record: Record,
     reduction: Option<&Reduction>,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
 ) -> Vec<Result<RunResult>> {
     let lanes: Vec<LaneSpec> = chunk
         .iter()
@@ -272,7 +314,7 @@ fn run_lanes(
         lanes: &[LaneSpec],
         record: Record,
         reduction: Option<&Reduction>,
-        cancel: Option<&AtomicBool>,
+        cancel: Option<&Control>,
     ) -> Vec<Result<RunResult>> {
         let out = match reduction {
             Some(red) => synthesis::run_lanes::<W>(model, lanes, red, record, cancel),
@@ -589,7 +631,7 @@ impl<'m> Simulation<'m, 1> {
     }
 
     /// Runs all steps; `cancel` is polled every `CANCEL_POLL` steps.
-    pub fn run(self, cancel: Option<&AtomicBool>) -> Result<RunResult> {
+    pub fn run(self, cancel: Option<&Control>) -> Result<RunResult> {
         self.run_lanes(cancel)?.pop().expect("one lane")
     }
 }
@@ -968,7 +1010,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
     /// Runs all steps of every lane. The outer error is shared by all lanes (setup, or
     /// cancellation: `cancel` is polled every `CANCEL_POLL` steps); the inner ones are each
     /// lane's own.
-    pub fn run_lanes(mut self, cancel: Option<&AtomicBool>) -> Result<Vec<Result<RunResult>>> {
+    pub fn run_lanes(mut self, cancel: Option<&Control>) -> Result<Vec<Result<RunResult>>> {
         self.initial_state()?;
         let model = self.model;
         let cfg = &model.cfg;
@@ -985,7 +1027,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let mut delta_free = vec![0.0; W * nw];
 
         for step in 0..self.n_steps {
-            if step % CANCEL_POLL == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            if step % CANCEL_POLL == 0 && poll(cancel, step, self.n_steps) {
                 return Err(VtbError::Cancelled);
             }
             if step % FINITE_POLL == 0 {

@@ -7,7 +7,6 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
@@ -58,12 +57,12 @@ fn make_exception<'py>(py: Python<'py>, e: &VtbError) -> PyResult<Bound<'py, PyA
 /// `SolverError` instead of crossing into Python.
 fn run_detached<'py, T: Send>(
     py: Python<'py>,
-    mut tick: impl FnMut(Python<'py>) -> PyResult<()>,
-    work: impl FnOnce(&AtomicBool) -> T + Send,
+    mut tick: impl FnMut(Python<'py>, &vtb::Control) -> PyResult<()>,
+    work: impl FnOnce(&vtb::Control) -> T + Send,
 ) -> PyResult<T> {
-    let cancel = AtomicBool::new(false);
+    let control = vtb::Control::new();
     std::thread::scope(|s| {
-        let handle = s.spawn(|| work(&cancel));
+        let handle = s.spawn(|| work(&control));
         loop {
             let finished = py.detach(|| {
                 for _ in 0..10 {
@@ -74,8 +73,8 @@ fn run_detached<'py, T: Send>(
                 }
                 handle.is_finished()
             });
-            if let Err(e) = py.check_signals().and_then(|_| tick(py)) {
-                cancel.store(true, Ordering::Relaxed);
+            if let Err(e) = py.check_signals().and_then(|_| tick(py, &control)) {
+                control.cancel();
                 let _ = py.detach(|| handle.join());
                 return Err(e);
             }
@@ -381,9 +380,10 @@ impl Reduction {
     }
 }
 
-/// Runs one configuration; returns a dict of histories and metrics.
+/// Runs one configuration; returns a dict of histories and metrics. `progress(done, total)`
+/// (steps) is called from the calling thread every 50 ms while it runs.
 #[pyfunction]
-#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, reduction=None))]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, reduction=None, progress=None))]
 fn simulate<'py>(
     py: Python<'py>,
     config_json: &str,
@@ -391,14 +391,18 @@ fn simulate<'py>(
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
     reduction: Option<&Reduction>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile)?;
     let red = reduction.map(|r| Arc::clone(&r.0));
     let out = run_detached(
         py,
-        |_| Ok(()),
-        |cancel| vtb::simulate_with(&cfg, &p, red.as_deref(), Some(cancel)),
+        |_, control| match &progress {
+            Some(f) => f.call1(control.progress()).map(|_| ()),
+            None => Ok(()),
+        },
+        |control| vtb::simulate_with(&cfg, &p, red.as_deref(), Some(control)),
     )?;
     let r = out.map_err(|e| to_py_err(py, e))?;
     result_to_dict(py, r)
@@ -469,7 +473,7 @@ fn batch<'py>(
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     let finished: Mutex<Vec<(usize, vtb::Result<RunResult>)>> = Mutex::new(Vec::new());
     let mut done = 0;
-    let tick = |py: Python<'py>| -> PyResult<()> {
+    let tick = |py: Python<'py>, _: &vtb::Control| -> PyResult<()> {
         let ready = std::mem::take(&mut *finished.lock().unwrap_or_else(|e| e.into_inner()));
         if ready.is_empty() {
             return Ok(());

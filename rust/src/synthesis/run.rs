@@ -32,11 +32,11 @@ use crate::integrator::GW;
 use crate::model::Model;
 use crate::results::{Record, RunResult};
 use crate::simulate::{
-    CANCEL_POLL, CarRun, FINITE_POLL, LaneSpec, Mover, finish, note_contact, static_wheel_loads,
+    CANCEL_POLL, CarRun, Control, FINITE_POLL, LaneSpec, Mover, finish, note_contact, poll,
+    static_wheel_loads,
 };
 use crate::vehicle::N_WHEELS;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One run on a reduction.
 pub fn run(
@@ -44,7 +44,7 @@ pub fn run(
     spec: &LaneSpec,
     red: &Reduction,
     record: Record,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
 ) -> Result<RunResult> {
     run_lanes::<1>(model, std::slice::from_ref(spec), red, record, cancel)?
         .pop()
@@ -59,12 +59,12 @@ pub fn run_lanes<const W: usize>(
     specs: &[LaneSpec],
     red: &Reduction,
     record: Record,
-    cancel: Option<&AtomicBool>,
+    cancel: Option<&Control>,
 ) -> Result<Vec<Result<RunResult>>> {
     let mut run = Run::<W>::new(model, specs, red, record)?;
     run.initial_state()?;
     for step in 0..run.n_steps {
-        if step % CANCEL_POLL == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+        if step % CANCEL_POLL == 0 && poll(cancel, step, run.n_steps) {
             return Err(VtbError::Cancelled);
         }
         if step % FINITE_POLL == 0 {
