@@ -8,7 +8,8 @@ as it is known, so that the study journals it at once:
 * in process (``executor=None``): one :func:`vtb.simulate_batch` call on ``threads`` cores;
   its lockstep groups report as each finishes;
 * on an executor (a :class:`concurrent.futures.Executor`: a process pool, or Dask's
-  ``client.get_executor()``): tasks of ``chunk`` runs (default one lockstep group), each a
+  ``client.get_executor()``): tasks of ``chunk`` runs of one model (default one lockstep
+  group; runs that differ only in their dampers' parameters share a model), each a
   batch on one worker thread, reported as each task completes. Dask reruns the tasks of a
   worker that dies on the others, so a lost worker loses nothing; a process pool that breaks
   reports its unfinished runs as failed (:class:`WorkerLost`), which a study records and
@@ -25,6 +26,7 @@ from __future__ import annotations
 from concurrent.futures import Executor, as_completed
 from typing import Callable, Optional, Sequence
 
+from . import _core
 from .config import Config
 from .errors import SolverError
 from .simulate import DEFAULT_LANES, SYNTHESIS_LANES, simulate_batch
@@ -57,7 +59,11 @@ def run_cases(configs: Sequence[Config], on_result: Callable, *, executor: Optio
         simulate_batch(configs, threads=threads, on_error="return", on_result=on_result)
         return
     size = chunk or default_chunk(configs)
-    tasks = [list(range(a, min(a + size, len(configs)))) for a in range(0, len(configs), size)]
+    # A task holds runs of one model (the core's key), so that its lockstep groups are full.
+    members: dict = {}
+    for i, c in enumerate(configs):
+        members.setdefault(_core.model_key(c.to_core_json()), []).append(i)
+    tasks = [m[a:a + size] for m in members.values() for a in range(0, len(m), size)]
     futures = {executor.submit(_task, [configs[i] for i in t]): t for t in tasks}
     try:
         for fut in as_completed(futures):

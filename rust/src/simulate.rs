@@ -149,7 +149,7 @@ impl<'a> LaneSpec<'a> {
 }
 
 /// Jobs that may share one model: configurations equal up to the dampers' parameters.
-fn model_key(cfg: &Config) -> String {
+pub fn model_key(cfg: &Config) -> String {
     let mut c = cfg.clone();
     if let Some(t) = &mut c.tids {
         (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);

@@ -541,6 +541,13 @@ fn index_names(py: Python<'_>, config_json: &str) -> PyResult<Vec<String>> {
     Ok(vtb::results::index_names(&parse_config(py, config_json)?))
 }
 
+/// The key under which the core lets jobs share one model (and run in lockstep): their
+/// configurations equal up to the dampers' parameters.
+#[pyfunction]
+fn model_key(py: Python<'_>, config_json: &str) -> PyResult<String> {
+    Ok(vtb::simulate::model_key(&parse_config(py, config_json)?))
+}
+
 /// `x` (sampled every `dt` s) low-passed at `band_limit` Hz by the core's zero-phase filter,
 /// the one every band-limited index uses.
 #[pyfunction]
@@ -647,6 +654,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch, m)?)?;
     m.add_function(wrap_pyfunction!(schema, m)?)?;
     m.add_function(wrap_pyfunction!(index_names, m)?)?;
+    m.add_function(wrap_pyfunction!(model_key, m)?)?;
     m.add_function(wrap_pyfunction!(check_schema, m)?)?;
     m.add_function(wrap_pyfunction!(low_pass, m)?)?;
     m.add_function(wrap_pyfunction!(resolved_bands, m)?)?;
