@@ -4,6 +4,7 @@ parallel inside the Rust core (all cores, GIL released)."""
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass
 from typing import Callable, Optional, Sequence, Union
 
@@ -357,10 +358,13 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
     every 64 steps; the caller checks every 50 ms) with ``KeyboardInterrupt``.
 
     ``progress``: ``"auto"`` (default) shows a tqdm bar of the time steps once the run has
-    lasted :data:`PROGRESS_DELAY` s, so quick runs print nothing; ``True`` from the start;
-    ``False`` none; or a callable ``f(done, total)`` (steps) called every 50 ms."""
+    lasted :data:`PROGRESS_DELAY` s, on a terminal only (not in logs, pipes or worker
+    processes), so quick runs print nothing; ``True`` from the start, anywhere; ``False`` none;
+    or a callable ``f(done, total)`` (steps) called every 50 ms."""
     if not (progress in ("auto", True, False) or callable(progress)):
         raise config_error("progress", progress, 'must be "auto", True, False or a callable f(done, total)')
+    if progress == "auto" and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
+        progress = False
     text, profile = _prepare(config)
     bar = None
 

@@ -181,7 +181,7 @@ def _job(case_index: int, level: str, design: Optional[str], base: Config):
         cfg.tids = tids_around(cfg, b, k, c)
     cfg = case.make(cfg)
     t0 = time.perf_counter()
-    res = simulate(cfg)
+    res = simulate(cfg, progress=False)  # the study has its own bar
     return amplitudes(res), time.perf_counter() - t0
 
 
