@@ -74,3 +74,32 @@ def test_simulate_says_what_it_runs_and_how_it_relates_to_the_article():
     assert "this converged model differs by design" in converged
     other = "\n".join(cli._describe(example_config("two_span_sato"), "two_span_sato"))
     assert "article" not in other.split("irregularity")[1]
+
+
+def test_study_grid_command_runs_the_generic_study(tmp_path, capsys):
+    """`vtb study grid` gives, case for case, what vtb.study gives; bad --vary names itself."""
+    import numpy as np
+
+    import vtb
+
+    c = vtb.paper_config()
+    c.solver.t_end = 0.1
+    c.output.points = [6.0]
+    c.tids = vtb.tids_around(c, count=2, x=6.0)
+    cfg = tmp_path / "short.toml"
+    c.to_toml(cfg)
+    out = tmp_path / "g.csv"
+    args = ["study", "grid", "--config", str(cfg), "--vary", "speed=70,80", "--vary", "tids.k_t=1e8", "--indices", "rail_acc_max,car_comfort_aw",
+            "--uncontrolled", "--out", str(out), "--no-progress"]
+    assert cli.main(args) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0].split() == ["case", "speed", "tids.k_t", "rail_acc_max", "car_comfort_aw"] and len(printed) == 1 + 3 + 1
+    want = vtb.study(vtb.Config.from_toml(cfg), {"speed": [70.0, 80.0], "tids.k_t": [1e8]}, indices=["rail_acc_max", "car_comfort_aw"],
+                     reference={"tids": None}, progress=False)
+    got = vtb.studies.read_journal(out)
+    assert got.variables == ("speed", "tids.k_t") and got.indices == ("rail_acc_max", "car_comfort_aw")
+    for k in ("case", "speed", "tids.k_t", "rail_acc_max", "car_comfort_aw"):
+        np.testing.assert_array_equal(got.columns[k], want.columns[k])
+    assert np.isnan(got.columns["speed"][0])
+    assert cli.main(["study", "grid", "--vary", "speed=fast", "--out", str(tmp_path / "x.csv"), "--no-progress"]) == 2
+    assert "--vary" in capsys.readouterr().err

@@ -110,7 +110,7 @@ def parse(path: Path, field: str, layout: Optional[Layout] = None):
         raise bad(1, f"journal format {fmt!r}; this vtb reads format {FORMAT}")
     header = next(csv.reader(lines[1:2]), None)
     if layout is None:
-        n = len(keys) if keys is not None else 3  # journals of vtb.sweep carry no key count: b_t, k_t, c_t
+        n = keys if isinstance(keys, int) else 3  # journals of vtb.sweep carry no key count: b_t, k_t, c_t
         if not header or header[-1] != "error" or len(header) < n + 1:
             raise bad(2, f"the header must list the variables, the indices and error, not {header}")
         layout = Layout(tuple(header[:n]), tuple(header[n:-1]))

@@ -195,6 +195,22 @@ def result_of(rows: list, config: Config, layout: jr.Layout, cls=StudyResult):
     return cls(columns=columns, config=config, variables=tuple(layout.keys), indices=tuple(layout.values))
 
 
+def read_journal(path: Union[str, Path], field: str = "path", layout: Optional[jr.Layout] = None, result_class=StudyResult) -> StudyResult:
+    """A study journal as a result, without running anything: the configuration of its stamp,
+    the variables and indices of its header (or ``layout``), one row per key (the last
+    successful one), the reference case as case 0 and the others numbered in their order in the
+    file. A malformed journal raises a :class:`ConfigError` naming ``field`` and the line."""
+    path = Path(path)
+    if not path.is_file():
+        raise config_error(field, str(path), "no such study journal")
+    config, layout, rows = jr.parse(path, field, layout)
+    if config is None:
+        raise config_error(field, str(path), "is an empty file, not a study journal")
+    ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the reference first (stable)
+    start = 0 if ordered and ordered[0][0] is None else 1
+    return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, layout, result_class)
+
+
 def case_config(config: Config, case: dict, variables: Sequence[str], indices: Sequence[str], reference: Optional[Mapping] = None) -> Config:
     """The configuration of one case: ``config`` with its variables set (all NaN: the
     ``reference`` fields set instead), reporting ``indices``."""

@@ -27,7 +27,8 @@ from .errors import VtbError, config_error
 from .journal import config_stamp
 from .presets import tids_around
 from .resolution import pinned_pinned_frequency
-from .studies import StudyResult, result_of, rows_of, study
+from . import studies
+from .studies import StudyResult, rows_of, study
 
 __all__ = ["sweep", "SweepResult", "config_stamp", "pinned_pinned_frequency"]
 
@@ -177,15 +178,7 @@ def read_journal(path: Union[str, Path], field: str = "path") -> SweepResult:
     of its stamp and one row per key (the rule of :func:`sweep` for repeated keys), the baseline
     as case 0 and the TID cases numbered in their order in the file. A malformed journal raises
     a :class:`ConfigError` naming ``field`` and the line."""
-    path = Path(path)
-    if not path.is_file():
-        raise config_error(field, str(path), "no such sweep journal")
-    config, _, rows = jr.parse(path, field, LAYOUT)
-    if config is None:
-        raise config_error(field, str(path), "is an empty file, not a sweep journal")
-    ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the baseline first (stable)
-    start = 0 if ordered and ordered[0][0] is None else 1
-    return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, LAYOUT, SweepResult)
+    return studies.read_journal(path, field, LAYOUT, SweepResult)
 
 
 def sweep(
