@@ -19,7 +19,7 @@ repeats = int(sys.argv[1]) if len(sys.argv) > 1 else 5
 
 
 def timings(cfg):
-    x0, dx, values = vtb.irregularity_profile(cfg)
+    x0, dx, values, _ = vtb.irregularity_profile(cfg)
     js = cfg.to_core_json()
     total, core = [], []
     for _ in range(repeats):

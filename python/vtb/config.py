@@ -395,7 +395,7 @@ def _to_plain(obj):
     return obj
 
 
-_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): Vehicle, ("Config", "forces"): MovingForce}
+_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): Vehicle, ("Config", "forces"): MovingForce, ("Irregularity", "parts"): Irregularity}
 
 
 def _from_plain(cls, data, path: str):

@@ -37,13 +37,25 @@ Generation from a seed (:class:`numpy.random.Generator`), restricted to the wave
 Deterministic shapes: ``cosine_dip`` (a single (depth/2)(1 − cos) dip of given length),
 ``corrugation`` ((amplitude/2)(1 − cos(2πx/λ)) over an interval) and ``sampled`` (a profile
 given by the user). ``none`` is a perfectly smooth rail.
+
+Local defects (docs/defects.md): ``rail_joint`` (a step and a V-shaped dip of total angle 2α =
+4·depth/length at the joint, Jenkins et al. 1974), ``dipped_weld`` (a cosine dip with a short
+cosine crown at its centre, after Zhai) and ``wheel_flat`` (a rounded flat of length L and
+depth L²/(16R) on one wheel, repeating every wheel circumference 2πR; Wu & Thompson 2002).
+The rail defects are seen through the wheel: the wheel centre rides the upper envelope of
+circles of the wheel's radius rolled over the rail geometry, so a step or a kink gives the
+finite contact slope a real wheel meets, not one set by the sampling.
+
+A profile is its own ``kind`` plus any number of ``parts`` (each an :class:`Irregularity`),
+superposed: a long-wave spectrum for the car body, a short-wave one for the track, and local
+defects by position.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
@@ -141,6 +153,11 @@ def psd(kind: str, **params) -> Callable[[np.ndarray], np.ndarray]:
 
 SPECTRA = ("tbt3352", "sato", "iso3095", "german_low", "german_high", "fra1", "fra2", "fra3", "fra4", "fra5", "fra6")
 SHAPES = ("none", "cosine_dip", "corrugation", "sampled")
+#: Local defects of the rail (seen through the wheel's radius) and of a wheel's tread.
+DEFECTS = ("rail_joint", "dipped_weld", "wheel_flat")
+#: Default sampling step of a local defect (m): it resolves the ~30 mm over which a wheel of
+#: radius 0.46 m meets a 1 mm step (√(2Rh)).
+DEFECT_DX = 5e-4
 
 
 def band_variance(kind: str, wavelength_min: float, wavelength_max: float, **params) -> float:
@@ -196,6 +213,39 @@ class IrregularityWarning(UserWarning):
     """A generated irregularity does not realise its band (see :meth:`Irregularity.profile`)."""
 
 
+def wheel_centre_path(r: np.ndarray, dx: float, radius: float) -> np.ndarray:
+    """The irregularity (m, dip positive) the centre of a rigid wheel of ``radius`` (m)
+    follows over the rail geometry ``r`` sampled at ``dx``: the upper envelope of the circles
+    it can touch, z(x) = max_s [−r(s) + √(R² − (x − s)²)] − R. A wheel bridges a kink or the
+    edge of a step instead of following it, so the contact input has the slope and curvature a
+    real wheel meets, independent of the sampling once dx resolves √(2Rh)."""
+    e = -np.asarray(r, dtype=float)
+    z = e.copy()
+    h = float(e.max() - e.min())
+    reach = math.sqrt(2.0 * radius * h + h * h)
+    for j in range(1, min(int(math.ceil(reach / dx)), e.size - 1) + 1):
+        if j * dx >= radius:
+            break
+        drop = radius - math.sqrt(radius * radius - (j * dx) ** 2)
+        np.maximum(z[:-j], e[j:] - drop, out=z[:-j])
+        np.maximum(z[j:], e[:-j] - drop, out=z[j:])
+    return -z
+
+
+def _grid_size(x_min: float, x_max: float, dx: float, memory_budget: Optional[float], name: str) -> int:
+    """Samples of a grid of step dx over [x_min, x_max]; a count beyond the memory budget
+    (bytes; default the core's ``solver.memory_budget``) raises naming ``name``."""
+    samples = (x_max - x_min) / dx + 1.0
+    budget = properties("SolverConfig")["memory_budget"]["default"] if memory_budget is None else memory_budget
+    if not samples * _PROFILE_BYTES_PER_SAMPLE <= budget:
+        raise config_error(
+            name, dx,
+            f"{samples:.3e} samples over {x_max - x_min:g} m would need about {samples * _PROFILE_BYTES_PER_SAMPLE / 1e9:.3g} GB, "
+            f"beyond solver.memory_budget = {budget / 1e9:.3g} GB",
+        )
+    return int(math.ceil((x_max - x_min) / dx)) + 1
+
+
 # --------------------------------------------------------------------------------------------
 # The configuration object
 # --------------------------------------------------------------------------------------------
@@ -210,8 +260,9 @@ class Irregularity(StrictFields):
     ----------
     kind
         A spectrum (``"tbt3352"``, ``"sato"``, ``"iso3095"``, ``"german_low"``,
-        ``"german_high"``, ``"fra1"`` … ``"fra6"``) or a shape (``"none"``, ``"cosine_dip"``,
-        ``"corrugation"``, ``"sampled"``). Default ``"none"``.
+        ``"german_high"``, ``"fra1"`` … ``"fra6"``), a shape (``"none"``, ``"cosine_dip"``,
+        ``"corrugation"``, ``"sampled"``) or a local defect (``"rail_joint"``,
+        ``"dipped_weld"``, ``"wheel_flat"``). Default ``"none"``.
     wavelength_min, wavelength_max
         Band of a random profile (m). Defaults 0.01 and 1.0.
     method
@@ -220,8 +271,8 @@ class Irregularity(StrictFields):
     seed
         Seed (non-negative integer) of the random phases; a realisation is fixed by it.
     dx
-        Sampling step of a generated profile (m); ``None``: λ_min/10. For ``"sampled"``: the
-        grid step of ``values``.
+        Sampling step of a generated profile (m); ``None``: λ_min/10 for a spectrum, 0.5 mm
+        for a local defect. For ``"sampled"``: the grid step of ``values``.
     scale
         Factor (−) on the generated profile (for calibration). Default 1.
     n_freq
@@ -229,12 +280,33 @@ class Irregularity(StrictFields):
     sato_a
         Sato's roughness constant A (rad²; S(Ω) = A/Ω³), the level of the ``"sato"`` spectrum.
     depth, length, position
-        ``"cosine_dip"``: depth (m), length (m) and start (m) of the dip.
+        ``"cosine_dip"``: depth (m), length (m) and start (m) of the dip. ``"rail_joint"``:
+        depth (m) of the V-shaped dip at the joint, its length (m, both rail ends together)
+        and the joint's position (m). ``"dipped_weld"``: depth (m) and length (m, typically
+        1) of the dip and the weld's position (m, its centre). ``"wheel_flat"``: depth (m;
+        0 gives L²/(16R)) and length L (m) of the rounded flat, and the position (m) at which
+        its centre meets the rail (once every 2πR before and after).
+    step
+        ``"rail_joint"``: height (m) by which the rail after the joint lies lower (positive:
+        a step down in the running direction; negative: a step up, the impact case).
+    crown, crown_length
+        ``"dipped_weld"``: height (m, ≥ 0) and length (m) of the weld's crown, a cosine hump
+        at the dip's centre. Defaults 0 and 0.1.
+    wheel
+        ``"wheel_flat"``: the wheel that carries the flat, counted over the run's wheels
+        (vehicles in order, wheelsets front to rear from 0).
+    wheel_radius
+        Rolling radius (m) of the wheel a defect is seen through; ``None``: that of the run's
+        first vehicle (``"rail_joint"``, ``"dipped_weld"``) or of the flat wheel's vehicle
+        (``"wheel_flat"``). 0 applies a rail defect's raw geometry.
     amplitude, wavelength, start, end
         ``"corrugation"``: peak-to-peak amplitude (m), wavelength (m), and the stretch
         [start, end] (m) it covers.
     x0, values
         ``"sampled"``: position of the first sample (m) and the samples r(x0 + i·dx) (m).
+    parts
+        Further irregularities (each an :class:`Irregularity` without parts of its own)
+        superposed on this one.
     """
 
     kind: str = "none"
@@ -255,19 +327,34 @@ class Irregularity(StrictFields):
     end: float = 0.0
     x0: float = 0.0
     values: list = field(default_factory=list)
+    step: float = 0.0
+    crown: float = 0.0
+    crown_length: float = 0.1
+    wheel: int = 0
+    wheel_radius: Optional[float] = None
+    parts: list = field(default_factory=list)
 
-    def validate(self, speed: Optional[float] = None, dt: Optional[float] = None) -> None:
+    def validate(self, speed: Optional[float] = None, dt: Optional[float] = None, n_wheels: Optional[int] = None, path: str = "irregularity") -> None:
         """Raises :class:`~vtb.errors.ConfigError` for an unusable setting. With ``speed`` and
         ``dt``, also rejects wavelengths the time step cannot resolve: the shortest wavelength
-        must be at least 2·v·Δt (the Nyquist limit of the excitation f = v/λ)."""
-        p = "irregularity"
+        must be at least 2·v·Δt (the Nyquist limit of the excitation f = v/λ). With
+        ``n_wheels``, a flat's wheel must be one of the run's."""
+        p = path
+        if not isinstance(self.parts, (list, tuple)):
+            raise config_error(f"{p}.parts", self.parts, "expected a list of vtb.Irregularity")
+        for i, part in enumerate(self.parts):
+            if not isinstance(part, Irregularity):
+                raise config_error(f"{p}.parts[{i}]", part, "expected a vtb.Irregularity")
+            if part.parts:
+                raise config_error(f"{p}.parts[{i}].parts", part.parts, "a part has no parts of its own")
+            part.validate(speed, dt, n_wheels, f"{p}.parts[{i}]")
 
         def finite(name, v, positive=False):
             if not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
                 raise config_error(f"{p}.{name}", v, "must be a finite number" + (" > 0" if positive else ""))
 
-        if self.kind not in SPECTRA + SHAPES:
-            raise config_error(f"{p}.kind", self.kind, f"unknown kind (known: {', '.join(SPECTRA + SHAPES)})")
+        if self.kind not in SPECTRA + SHAPES + DEFECTS:
+            raise config_error(f"{p}.kind", self.kind, f"unknown kind (known: {', '.join(SPECTRA + SHAPES + DEFECTS)})")
         finite("scale", self.scale)
         if self.scale < 0:
             raise config_error(f"{p}.scale", self.scale, "must be >= 0")
@@ -308,6 +395,32 @@ class Irregularity(StrictFields):
                 raise config_error(f"{p}.end", self.end, f"must exceed start = {self.start}")
             if speed is not None and dt is not None and speed > 0 and self.wavelength < 2.0 * speed * dt:
                 raise config_error(f"{p}.wavelength", self.wavelength, f"shorter than 2·v·Δt = {2 * speed * dt:.4g} m (Nyquist)")
+        elif self.kind in DEFECTS:
+            finite("position", self.position)
+            finite("depth", self.depth)
+            finite("length", self.length, True)
+            if self.depth < 0:
+                raise config_error(f"{p}.depth", self.depth, "must be >= 0 (a dip or a flat; a step's sign is in step)")
+            if self.wheel_radius is not None:
+                finite("wheel_radius", self.wheel_radius)
+                if self.wheel_radius < 0 or (self.kind == "wheel_flat" and self.wheel_radius == 0):
+                    raise config_error(f"{p}.wheel_radius", self.wheel_radius, "must be > 0" if self.kind == "wheel_flat" else "must be >= 0")
+            if self.kind == "rail_joint":
+                finite("step", self.step)
+            elif self.kind == "dipped_weld":
+                finite("crown", self.crown)
+                finite("crown_length", self.crown_length, True)
+                if self.crown < 0:
+                    raise config_error(f"{p}.crown", self.crown, "must be >= 0 (the crown's height above the dip)")
+                if self.crown_length > self.length:
+                    raise config_error(f"{p}.crown_length", self.crown_length, f"must not exceed the dip's length {self.length}")
+            else:
+                if not isinstance(self.wheel, (int, np.integer)) or isinstance(self.wheel, bool) or self.wheel < 0:
+                    raise config_error(f"{p}.wheel", self.wheel, "must be a non-negative integer")
+                if n_wheels is not None and self.wheel >= n_wheels:
+                    raise config_error(f"{p}.wheel", self.wheel, f"the run has {n_wheels} wheels (0 to {n_wheels - 1})")
+                if self.wheel_radius is not None and self.length >= math.pi * self.wheel_radius:
+                    raise config_error(f"{p}.length", self.length, f"must be shorter than half the circumference π·R = {math.pi * self.wheel_radius:.4g} m")
         elif self.kind == "sampled":
             finite("x0", self.x0)
             if self.dx is None:
@@ -328,28 +441,58 @@ class Irregularity(StrictFields):
             return self.wavelength / 20.0
         if self.kind == "cosine_dip":
             return self.length / 50.0
+        if self.kind in DEFECTS:
+            return DEFECT_DX
         return 1.0
 
-    def profile(self, x_min: float, x_max: float, memory_budget: Optional[float] = None) -> tuple[float, float, np.ndarray]:
-        """Samples r(x) (m) on [x_min, x_max]: returns (x0, dx, values). A sample count whose
+    def profile(self, x_min: float, x_max: float, memory_budget: Optional[float] = None, wheel_radius: Optional[float] = None) -> tuple[float, float, np.ndarray]:
+        """Samples the rail's r(x) (m) on [x_min, x_max]: returns (x0, dx, values); the rail
+        defects are seen through a wheel of radius ``wheel_radius`` (m; ``None`` or 0: their
+        raw geometry, unless a part names its own). See :meth:`sample` for the parts and the
+        wheels' treads."""
+        x0, dx, values, _ = self.sample(x_min, x_max, memory_budget, [wheel_radius or 0.0])
+        return x0, dx, values
+
+    def sample(self, x_min: float, x_max: float, memory_budget: Optional[float] = None, wheel_radii: Sequence[float] = ()) -> tuple[float, float, np.ndarray, list]:
+        """Samples what the wheels roll on over [x_min, x_max]: returns (x0, dx, rail, treads),
+        the rail's r(x) (m) and, when a part is a wheel flat, one tread row per wheel (m, an
+        empty array for a round wheel; ``wheel_radii`` gives each wheel's radius, the first
+        also the radius the rail defects are seen through). The parts are superposed on the
+        finest part's grid, each realised on its own grid and interpolated linearly (so a
+        random part's realisation is fixed by its own seed and spacing). A sample count whose
         arrays would exceed ``memory_budget`` bytes (default: the core's
         ``solver.memory_budget``) raises :class:`~vtb.errors.ConfigError`; an inverse-FFT
         spectrum whose band the sampled length cannot realise (λ_max beyond it) warns with
         the realised fraction of the band's variance (:class:`IrregularityWarning`)."""
-        if self.kind == "none":
-            return 0.0, 1.0, np.zeros(0)
+        parts = [q for q in (self, *self.parts) if q.kind != "none"]
+        rail = [q for q in parts if q.kind != "wheel_flat"]
+        flats = [q for q in parts if q.kind == "wheel_flat"]
+        radius = float(wheel_radii[0]) if len(wheel_radii) else 0.0
+        if not parts:
+            return 0.0, 1.0, np.zeros(0), []
+        if len(rail) == 1 and not flats:
+            x0, dx, values = rail[0]._own(x_min, x_max, memory_budget, radius)
+            return x0, dx, values, []
+        dx = min(q.sample_spacing() for q in parts)
+        n = _grid_size(x_min, x_max, dx, memory_budget, f"irregularity.dx")
+        x = x_min + dx * np.arange(n)
+        values = np.zeros(n)
+        for q in rail:
+            x0q, dxq, v = q._own(x_min, x_max, memory_budget, radius)
+            values += np.interp(x, x0q + dxq * np.arange(v.size), v)
+        treads = [np.zeros(0) for _ in wheel_radii] if flats else []
+        for q in flats:
+            r = q.wheel_radius if q.wheel_radius is not None else float(wheel_radii[q.wheel])
+            row = treads[q.wheel] if treads[q.wheel].size else np.zeros(n)
+            treads[q.wheel] = row + q._flat(x, r) * q.scale
+        return float(x_min), float(dx), values, treads
+
+    def _own(self, x_min: float, x_max: float, memory_budget: Optional[float], radius: float) -> tuple[float, float, np.ndarray]:
+        """This irregularity's rail profile alone (without its parts) on its own grid."""
         if self.kind == "sampled":
             return float(self.x0), float(self.dx), np.asarray(self.values, dtype=float) * self.scale
         dx = self.sample_spacing()
-        samples = (x_max - x_min) / dx + 1.0
-        budget = properties("SolverConfig")["memory_budget"]["default"] if memory_budget is None else memory_budget
-        if not samples * _PROFILE_BYTES_PER_SAMPLE <= budget:
-            raise config_error(
-                "irregularity.dx", dx,
-                f"{samples:.3e} samples over {x_max - x_min:g} m would need about {samples * _PROFILE_BYTES_PER_SAMPLE / 1e9:.3g} GB, "
-                f"beyond solver.memory_budget = {budget / 1e9:.3g} GB",
-            )
-        n = int(math.ceil((x_max - x_min) / dx)) + 1
+        n = _grid_size(x_min, x_max, dx, memory_budget, "irregularity.dx")
         x = x_min + dx * np.arange(n)
         if self.kind in SPECTRA:
             s = psd(self.kind, sato_a=self.sato_a)
@@ -363,10 +506,41 @@ class Irregularity(StrictFields):
         elif self.kind == "cosine_dip":
             u = (x - self.position) / self.length
             r = np.where((u >= 0) & (u <= 1), 0.5 * self.depth * (1.0 - np.cos(2.0 * math.pi * u)), 0.0)
-        else:  # corrugation
+        elif self.kind == "corrugation":
             inside = (x >= self.start) & (x <= self.end)
             r = np.where(inside, 0.5 * self.amplitude * (1.0 - np.cos(2.0 * math.pi * (x - self.start) / self.wavelength)), 0.0)
+        else:
+            r = self._rail_defect(x, self.wheel_radius if self.wheel_radius is not None else radius)
         return float(x_min), float(dx), r * self.scale
+
+    def _rail_defect(self, x: np.ndarray, radius: float) -> np.ndarray:
+        """A rail joint or dipped weld on the grid x, seen through a wheel of ``radius`` (m):
+        the raw geometry over its stretch plus the wheel's reach, then the wheel centre's path."""
+        half = 0.5 * self.length
+        if self.kind == "rail_joint":
+            raw = lambda u: np.where(u >= 0.0, self.step, 0.0) + self.depth * np.clip(1.0 - np.abs(u) / half, 0.0, None)
+            height = self.depth + abs(self.step)
+        else:
+            def raw(u):
+                dip = np.where(np.abs(u) <= half, 0.5 * self.depth * (1.0 + np.cos(math.pi * u / half)), 0.0)
+                c = 0.5 * self.crown_length
+                crown = np.where(np.abs(u) <= c, 0.5 * self.crown * (1.0 + np.cos(math.pi * u / c)), 0.0)
+                return dip - crown
+            height = self.depth + self.crown
+        reach = math.sqrt(max(2.0 * radius * height, 0.0)) if radius > 0 else 0.0
+        u = x - self.position
+        r = raw(u)
+        near = np.flatnonzero(np.abs(u) <= half + 2.0 * reach + 2.0 * (x[1] - x[0] if x.size > 1 else 0.0))
+        if radius > 0 and near.size > 2:
+            r[near] = wheel_centre_path(r[near], float(x[1] - x[0]), radius)
+        return r
+
+    def _flat(self, x: np.ndarray, radius: float) -> np.ndarray:
+        """A rounded wheel flat of length L (depth L²/(16R) unless given) at ``position`` and
+        every circumference 2πR from it, as the irregularity under its wheel at x (m)."""
+        depth = self.depth if self.depth > 0 else self.length**2 / (16.0 * radius)
+        u = np.mod(x - self.position + 0.5 * self.length, 2.0 * math.pi * radius)
+        return np.where(u <= self.length, 0.5 * depth * (1.0 - np.cos(2.0 * math.pi * u / self.length)), 0.0)
 
     def _check_realised_band(self, s, n: int, dx: float) -> None:
         """Warns when the inverse FFT's frequency grid (spacing 1/(n·dx)) realises the band's

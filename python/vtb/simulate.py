@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 from dataclasses import dataclass
-from typing import Callable, Optional, Sequence, Union
+from typing import Callable, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
@@ -51,7 +51,8 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
     if not isinstance(cfg.irregularity, Irregularity):
         raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")
-    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)))
+    vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
+    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), n_wheels=WHEELS_PER_CAR * len(vehicles))
     _warn_band_limit(cfg)
     return text, irregularity_profile(cfg)
 
@@ -72,20 +73,38 @@ def _warn_band_limit(cfg: Config) -> None:
         pass
 
 
-def irregularity_profile(cfg: Config) -> tuple[float, float, np.ndarray]:
-    """The sampled irregularity (x0, dx, values in m) a configuration runs on. A structure
-    length the core will refuse gets no profile (the core then names the length)."""
+class SampledProfile(NamedTuple):
+    """What the wheels of a run roll on, on the grid x0 + i·dx (m): the rail's irregularity
+    ``values`` (m, positive = dip) and, with a wheel flat, one ``treads`` row per wheel (m, an
+    empty array for a round wheel; vehicles in order, wheelsets front to rear)."""
+
+    x0: float
+    dx: float
+    values: np.ndarray
+    treads: list
+
+
+def irregularity_profile(cfg: Config) -> SampledProfile:
+    """The sampled irregularity a configuration runs on. A structure length the core will
+    refuse gets no profile (the core then names the length)."""
     L = _real(getattr(cfg.structure, "length", None))
     if L is None or L <= 0:
-        return 0.0, 1.0, np.zeros(0)
+        return SampledProfile(0.0, 1.0, np.zeros(0), [])
     budget = _real(getattr(cfg.solver, "memory_budget", None))
-    return cfg.irregularity.profile(-_PROFILE_MARGIN, L + _PROFILE_MARGIN, memory_budget=budget)
+    radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(WHEELS_PER_CAR)]
+    x0, dx, values, treads = cfg.irregularity.sample(-_PROFILE_MARGIN, L + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
+    if treads and not values.size:
+        values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
+    return SampledProfile(x0, dx, values, treads)
 
 
-def _profile_args(profile: tuple) -> tuple:
-    x0, dx, values = profile
-    return x0, dx, values if values.size else None
+def _profile_args(profile: SampledProfile) -> tuple:
+    x0, dx, values, treads = profile
+    return x0, dx, values if values.size else None, treads
 
+
+#: Wheelsets of a car (the columns of ``Result.contact_force`` per car), from the core.
+WHEELS_PER_CAR: int = _core.WHEELS_PER_CAR
 
 #: Names of the 10 vehicle DOFs in the order of ``Result.vehicle_disp``.
 VEHICLE_DOFS = ("Z_c", "beta_c", "Z_t1", "beta_t1", "Z_t2", "beta_t2", "Z_w1", "Z_w2", "Z_w3", "Z_w4")

@@ -464,12 +464,18 @@ fn default_tid_lower() -> String {
     "slab".into()
 }
 
-/// Sampled irregularity r(x) (m, positive = dip) on a uniform grid, linearly interpolated.
+/// What the wheels roll on, sampled on a uniform grid x0 + i·dx and linearly interpolated:
+/// the rail's irregularity r(x) (m, positive = dip) and each wheel's own tread irregularity
+/// as a function of the wheel's position x (m, positive = the wheel centre drops, as over a
+/// dip; a wheel flat repeats once per wheel circumference).
 #[derive(Debug, Clone, Default)]
 pub struct Profile {
     pub x0: f64,
     pub dx: f64,
     pub values: Vec<f64>,
+    /// Empty (round wheels), or one row per wheel of the run (vehicles in order, wheelsets
+    /// front to rear) on the grid of `values`; an empty row is a round wheel.
+    pub treads: Vec<Vec<f64>>,
 }
 
 impl Profile {
@@ -478,20 +484,38 @@ impl Profile {
             x0: 0.0,
             dx: 1.0,
             values: Vec::new(),
+            treads: Vec::new(),
         }
     }
 
-    /// r(x); an empty profile is a perfectly smooth rail.
+    /// The grid interval holding x and the weight of its right end.
+    #[inline]
+    fn locate(&self, x: f64) -> (usize, f64) {
+        let s = (x - self.x0) / self.dx;
+        let i = (s.floor() as isize).clamp(0, self.values.len() as isize - 2) as usize;
+        (i, s - i as f64)
+    }
+
+    /// r(x) of the rail; an empty profile is a perfectly smooth rail.
     #[inline]
     pub fn at(&self, x: f64) -> f64 {
-        let n = self.values.len();
-        if n == 0 {
+        if self.values.is_empty() {
             return 0.0;
         }
-        let s = (x - self.x0) / self.dx;
-        let i = (s.floor() as isize).clamp(0, n as isize - 2) as usize;
-        let w = s - i as f64;
+        let (i, w) = self.locate(x);
         self.values[i] * (1.0 - w) + self.values[i + 1] * w
+    }
+
+    /// The irregularity under wheel `wheel` at position x: the rail's plus the wheel's tread.
+    #[inline]
+    pub fn under(&self, wheel: usize, x: f64) -> f64 {
+        match self.treads.get(wheel) {
+            Some(t) if !t.is_empty() => {
+                let (i, w) = self.locate(x);
+                (self.values[i] + t[i]) * (1.0 - w) + (self.values[i + 1] + t[i + 1]) * w
+            }
+            _ => self.at(x),
+        }
     }
 
     fn x_last(&self) -> f64 {
@@ -1076,6 +1100,7 @@ impl Config {
                 ));
             }
         }
+        self.validate_treads(profile)?;
         if let Some(t) = &self.tids {
             self.validate_tids(t, length)?;
         }
@@ -1121,6 +1146,44 @@ impl Config {
                     format!("{p}.element_length"),
                     format!("{h:?}"),
                     format!("gives more than {MAX_ELEMENTS} elements"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Tread irregularities: none, or one row per wheel, each empty or on the rail's grid.
+    fn validate_treads(&self, profile: &Profile) -> Result<()> {
+        if profile.treads.is_empty() {
+            return Ok(());
+        }
+        let wheels = self.vehicles.len() * crate::vehicle::N_WHEELS;
+        if profile.treads.len() != wheels {
+            return Err(VtbError::config(
+                "irregularity.treads",
+                format!("{} rows", profile.treads.len()),
+                format!("needs one row per wheel of the run ({wheels})"),
+            ));
+        }
+        for (k, row) in profile.treads.iter().enumerate() {
+            if row.is_empty() {
+                continue;
+            }
+            if row.len() != profile.values.len() {
+                return Err(VtbError::config(
+                    format!("irregularity.treads[{k}]"),
+                    format!("{} samples", row.len()),
+                    format!(
+                        "must be sampled on the rail profile's grid ({} samples)",
+                        profile.values.len()
+                    ),
+                ));
+            }
+            if let Some((j, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(VtbError::config(
+                    format!("irregularity.treads[{k}][{j}]"),
+                    v,
+                    "must be finite",
                 ));
             }
         }

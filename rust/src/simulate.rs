@@ -969,7 +969,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 let x = c.car.wheel_x0[w];
                 st.wheel_shape_into(x, self.patch[ci * N_WHEELS + w], &mut self.wheel_shape);
                 *r = dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
-                    + cfg.irregularity_share(0.0) * profile.at(x);
+                    + cfg.irregularity_share(0.0) * profile.under(ci * N_WHEELS + w, x);
             }
             c.set_static(j, rail, &loads[ci * N_WHEELS..(ci + 1) * N_WHEELS], g)?;
         }
@@ -1088,8 +1088,9 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 for (lane, l) in self.lanes.iter().enumerate() {
                     for w in 0..N_WHEELS {
                         let x = c.car.wheel_x0[w] + v * t1;
-                        delta_free[lane * nw + ci * N_WHEELS + w] =
-                            wheel[lane][w] - rail[lane][w] - share * l.profile.at(x);
+                        delta_free[lane * nw + ci * N_WHEELS + w] = wheel[lane][w]
+                            - rail[lane][w]
+                            - share * l.profile.under(ci * N_WHEELS + w, x);
                     }
                 }
                 for cj in 0..ncars {
@@ -1310,6 +1311,7 @@ mod tests {
             x0: -1.0,
             dx: 0.01,
             values: (0..20_000).map(|i| 1e-4 * (i as f64 * 0.3).sin()).collect(),
+            treads: Vec::new(),
         };
         let mut broken = wavy.clone();
         broken
@@ -1370,6 +1372,79 @@ mod tests {
             assert_eq!(alone.contact_force, got.contact_force);
             assert_eq!(alone.metrics(), got.metrics());
         }
+    }
+
+    /// A tread irregularity is the rail's seen by one wheel: the same samples as treads of
+    /// every wheel over a smooth rail give the rail run's bits; on one wheel only, that wheel's
+    /// contact force departs most from the smooth run's.
+    #[test]
+    fn treads_on_every_wheel_equal_the_rail_profile() {
+        let cfg = short_with_dampers();
+        let wheels = cfg.vehicles.len() * N_WHEELS;
+        let wavy: Vec<f64> = (0..20_000).map(|i| 1e-4 * (i as f64 * 0.3).sin()).collect();
+        let grid = |values: Vec<f64>, treads: Vec<Vec<f64>>| Profile {
+            x0: -1.0,
+            dx: 0.01,
+            values,
+            treads,
+        };
+        let on_rail = grid(wavy.clone(), Vec::new());
+        let on_wheels = grid(vec![0.0; wavy.len()], vec![wavy.clone(); wheels]);
+        let mut one = vec![Vec::new(); wheels];
+        one[0] = wavy.clone();
+        let on_wheel_0 = grid(vec![0.0; wavy.len()], one);
+        let a = simulate(&cfg, &on_rail, None).unwrap();
+        let b = simulate(&cfg, &on_wheels, None).unwrap();
+        assert_eq!(a.contact_force, b.contact_force);
+        assert_eq!(a.metrics(), b.metrics());
+        let c = simulate(&cfg, &on_wheel_0, None).unwrap();
+        let a = simulate(&cfg, &grid(vec![0.0; wavy.len()], Vec::new()), None).unwrap();
+        let change = |w: usize| {
+            (0..=c.n_steps)
+                .map(|k| (c.contact_force[k * wheels + w] - a.contact_force[k * wheels + w]).abs())
+                .fold(0.0, f64::max)
+        };
+        // Wheel 0 rides its tread; the others feel it only through the car and the rail.
+        for w in 1..wheels {
+            assert!(
+                change(w) < 0.5 * change(0),
+                "wheel {w}: {} vs {}",
+                change(w),
+                change(0)
+            );
+        }
+    }
+
+    #[test]
+    fn treads_need_one_row_per_wheel_on_the_rail_grid() {
+        let cfg = short_with_dampers();
+        let p = Profile {
+            x0: -1.0,
+            dx: 0.01,
+            values: vec![0.0; 20_000],
+            treads: vec![vec![0.0; 10]],
+        };
+        let e = cfg.validate(&p).unwrap_err().to_string();
+        assert!(e.contains("irregularity.treads"), "{e}");
+        let wheels = cfg.vehicles.len() * N_WHEELS;
+        let mut rows = vec![Vec::new(); wheels];
+        rows[1] = vec![0.0; 10];
+        let e = cfg
+            .validate(&Profile {
+                treads: rows,
+                ..p.clone()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("irregularity.treads[1]"), "{e}");
+        let mut rows = vec![Vec::new(); wheels];
+        rows[0] = vec![0.0; 20_000];
+        rows[0][7] = f64::INFINITY;
+        let e = cfg
+            .validate(&Profile { treads: rows, ..p })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("irregularity.treads[0][7]"), "{e}");
     }
 
     #[test]

@@ -104,16 +104,26 @@ fn parse_config(py: Python<'_>, json: &str) -> PyResult<Config> {
     Config::from_json(json).map_err(|e| to_py_err(py, e))
 }
 
-fn make_profile(x0: f64, dx: f64, values: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Profile> {
+fn to_vec(v: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
+    Ok(v.as_slice()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
+        .to_vec())
+}
+
+/// A profile from its grid, the rail's samples and the wheels' tread rows (empty = round).
+fn make_profile(
+    x0: f64,
+    dx: f64,
+    values: Option<PyReadonlyArray1<'_, f64>>,
+    treads: Vec<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Profile> {
     Ok(match values {
         None => Profile::flat(),
         Some(v) => Profile {
             x0,
             dx,
-            values: v
-                .as_slice()
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
-                .to_vec(),
+            values: to_vec(&v)?,
+            treads: treads.iter().map(to_vec).collect::<PyResult<_>>()?,
         },
     })
 }
@@ -175,16 +185,17 @@ fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
 /// Validates a JSON configuration against an irregularity profile; raises on the first
 /// problem.
 #[pyfunction]
-#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None))]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, treads=Vec::new()))]
 fn validate(
     py: Python<'_>,
     config_json: &str,
     profile_x0: f64,
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
+    treads: Vec<PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<()> {
     let cfg = parse_config(py, config_json)?;
-    let p = make_profile(profile_x0, profile_dx, profile)?;
+    let p = make_profile(profile_x0, profile_dx, profile, treads)?;
     cfg.validate(&p).map_err(|e| to_py_err(py, e))
 }
 
@@ -383,18 +394,20 @@ impl Reduction {
 /// Runs one configuration; returns a dict of histories and metrics. `progress(done, total)`
 /// (steps) is called from the calling thread every 50 ms while it runs.
 #[pyfunction]
-#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, reduction=None, progress=None))]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, treads=Vec::new(), reduction=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
     config_json: &str,
     profile_x0: f64,
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
+    treads: Vec<PyReadonlyArray1<'_, f64>>,
     reduction: Option<&Reduction>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
-    let p = make_profile(profile_x0, profile_dx, profile)?;
+    let p = make_profile(profile_x0, profile_dx, profile, treads)?;
     let red = reduction.map(|r| Arc::clone(&r.0));
     let out = run_detached(
         py,
@@ -411,7 +424,7 @@ fn simulate<'py>(
 /// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0; jobs of
 /// one model in lockstep groups) and returns, in order, each run's metrics dict (or with
 /// `histories`, its full result dict) or its (unraised) exception. `profiles` are
-/// (x0, dx, values) triples shared by index through `profile_index`. From the calling thread,
+/// (x0, dx, values, treads) shared by index through `profile_index`. From the calling thread,
 /// as each lockstep group finishes: `on_result(i, item)` for each of its runs (i indexes
 /// `configs`), then `progress(done)`.
 #[pyfunction]
@@ -420,7 +433,12 @@ fn simulate<'py>(
 fn batch<'py>(
     py: Python<'py>,
     configs: Vec<String>,
-    profiles: Vec<(f64, f64, Option<PyReadonlyArray1<'_, f64>>)>,
+    profiles: Vec<(
+        f64,
+        f64,
+        Option<PyReadonlyArray1<'_, f64>>,
+        Vec<PyReadonlyArray1<'_, f64>>,
+    )>,
     profile_index: Vec<usize>,
     threads: usize,
     progress: Option<Bound<'py, PyAny>>,
@@ -442,7 +460,7 @@ fn batch<'py>(
     }
     let shared: Vec<Arc<Profile>> = profiles
         .into_iter()
-        .map(|(x0, dx, v)| make_profile(x0, dx, v).map(Arc::new))
+        .map(|(x0, dx, v, t)| make_profile(x0, dx, v, t).map(Arc::new))
         .collect::<PyResult<_>>()?;
     let mut jobs = Vec::with_capacity(configs.len());
     let mut items: Vec<Option<Bound<'py, PyAny>>> = vec![None; configs.len()];
@@ -665,5 +683,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     m.add("SYNTHESIS_LANES", vtb::simulate::SYNTHESIS_LANES)?;
+    m.add("WHEELS_PER_CAR", vtb::vehicle::N_WHEELS)?;
     Ok(())
 }

@@ -618,7 +618,8 @@ impl<'a, const W: usize> Run<'a, W> {
             for (lane, l) in self.lanes.iter().enumerate() {
                 let rail: [f64; N_WHEELS] = std::array::from_fn(|w| {
                     let wi = ci * N_WHEELS + w;
-                    rail0[wi] + cfg.irregularity_share(0.0) * l.spec.profile.at(self.wheel_x0[wi])
+                    rail0[wi]
+                        + cfg.irregularity_share(0.0) * l.spec.profile.under(wi, self.wheel_x0[wi])
                 });
                 c.set_static(
                     lane,
@@ -789,7 +790,7 @@ impl<'a, const W: usize> Run<'a, W> {
                     }
                     let x = self.wheel_x0[wi] + v * t1;
                     self.delta_free[c * nw + wi] =
-                        wheel[c][w] - rail - share * self.lanes[c].spec.profile.at(x);
+                        wheel[c][w] - rail - share * self.lanes[c].spec.profile.under(wi, x);
                 }
             }
         }
