@@ -30,7 +30,7 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "receptance_check.py", "speed_study.py"]
+    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "defect_impacts.py", "receptance_check.py", "speed_study.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
 
@@ -77,6 +77,16 @@ def test_receptance_example_finds_the_pinned_pinned_peaks(tmp_path):
 def test_comfort_example_warns_about_its_record():
     text = _run("comfort_check.py")
     assert "a_w =" in text and "Wz =" in text and "warning: comfort:" in text
+
+
+def test_defect_impacts_example():
+    """Every defect raises the peak wheel–rail force above the smooth rail's; the flat wheel
+    leaves the rail once per revolution."""
+    rows = {line[:36].strip(): line[36:].split() for line in _run("defect_impacts.py").splitlines()[1:]}
+    assert len(rows) == 6
+    smooth = float(rows.pop("smooth rail")[0])
+    assert all(float(r[0]) > 1.3 * smooth for r in rows.values())
+    assert float(rows["wheel flat (30 mm, wheel 0)"][3]) > 20
 
 
 def test_no_page_or_generated_report_carries_an_absolute_path():
