@@ -191,6 +191,7 @@ class Output(StrictFields):
     window: Optional[list] = _default("OutputConfig", "window")
     band_limit: Optional[float] = _default("OutputConfig", "band_limit")
     indices: Optional[list] = _default("OutputConfig", "indices")
+    deck_band: float = _default("OutputConfig", "deck_band")
 
 
 @documented("TidConfig")

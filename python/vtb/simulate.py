@@ -16,7 +16,7 @@ from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
 #: Units of the metrics by the ending of their names (``{layer}_acc_max`` → m/s²).
-METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_max_raw", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("_comfort_aw", "m/s²"), ("contact_force_max", "N"), ("contact_force_min", "N"), ("contact_loss_events", "–"))
+METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_max_raw", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("_comfort_aw", "m/s²"), ("_force_max", "N"), ("_force_min", "N"), ("contact_loss_events", "–"))
 
 
 def metric_unit(name: str) -> str:

@@ -658,3 +658,28 @@ def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
     f = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * math.pi)
     keep = (f >= fmin) & (f <= fmax)  # f = 0 for round-off negative rigid-body eigenvalues
     return Modes(f[keep], phi[:, keep], system.layers, method, system.json, system.length, n)
+
+
+#: EN 1990 A2 (A2.4.4.2.1): the lowest frequency (Hz) up to which the deck acceleration counts.
+DECK_BAND_FLOOR = 30.0
+
+
+def deck_band(config: Config, fmax: float = 120.0) -> float:
+    """The band (Hz) over which EN 1990 A2 (A2.4.4.2.1) checks the deck acceleration of a
+    configuration: the greatest of 30 Hz, 1.5 times the deck's first natural frequency and its
+    third. The deck is the bottom layer; its modes are the structure's modes below ``fmax``
+    (Hz) whose kinetic energy lies mostly in it. Set the result as ``output.deck_band`` when it
+    exceeds the default 30 Hz (short stiff spans).
+
+    Raises :class:`vtb.ConfigError` when fewer than three deck modes lie below ``fmax``."""
+    system = _assemble(config)
+    found = modes(config, fmax)
+    _, first, count = system.layers[-1]
+    deck = slice(first, first + count)
+    m_deck = system.m.tocsr()[deck, deck]
+    phi = found.shapes[deck, :]
+    share = np.einsum("ij,ij->j", phi, m_deck @ phi)  # φᵀMφ = 1 over the whole structure
+    f = found.frequencies[(share > 0.5) & (found.frequencies > 0)]
+    if f.size < 3:
+        raise config_error("fmax", fmax, f"only {f.size} deck modes below it; raise it to reach the deck's third mode")
+    return float(max(DECK_BAND_FLOOR, 1.5 * f[0], f[2]))

@@ -15,6 +15,10 @@ const RAW_PEAK: &str = "acc_max_raw";
 const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
 /// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::comfort`]).
 const COMFORT: &str = "car_comfort_aw";
+/// The deck acceleration of EN 1990 A2: the bottom layer's, low-passed at `output.deck_band`.
+pub const DECK: &str = "deck_acc_max";
+/// Each wheel's force extremes (`wheel{w}_{suffix}`).
+const WHEEL_INDICES: [&str; 2] = ["force_max", "force_min"];
 /// The wheels' indices.
 const CONTACT_INDICES: [&str; 3] = [
     "contact_force_max",
@@ -31,14 +35,30 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
             out.push(format!("{}_{s}", l.name));
         }
     }
+    if cfg.structure.layers.len() > 1 {
+        out.push(DECK.to_string());
+    }
     if !cfg.vehicles.is_empty() {
         out.extend(CAR_INDICES.map(String::from));
         if 1.0 / cfg.solver.dt >= crate::comfort::MIN_RATE {
             out.push(COMFORT.to_string());
+            out.extend((1..cfg.vehicles.len()).map(|k| car_comfort(k)));
         }
         out.extend(CONTACT_INDICES.map(String::from));
+        for w in 0..cfg.vehicles.len() * crate::vehicle::N_WHEELS {
+            out.extend(WHEEL_INDICES.map(|s| format!("wheel{w}_{s}")));
+        }
     }
     out
+}
+
+/// The ride comfort index of car `k` (the first car's is `car_comfort_aw`).
+fn car_comfort(k: usize) -> String {
+    if k == 0 {
+        COMFORT.to_string()
+    } else {
+        format!("car{k}_comfort_aw")
+    }
 }
 
 /// Whether `name` is an index of the layer `layer`.
@@ -108,6 +128,10 @@ pub struct RunResult {
     pub band_limit: Option<f64>,
     /// The indices `metrics` reports, `output.indices` (all without).
     pub indices: Option<Vec<String>>,
+    /// The deck among the recorded layers (the structure's bottom layer), if recorded.
+    pub deck: Option<usize>,
+    /// Low-pass frequency (Hz) of `deck_acc_max`, `output.deck_band`.
+    pub deck_band: f64,
 }
 
 impl RunResult {
@@ -125,7 +149,7 @@ impl RunResult {
         let len = n_steps + 1;
         let (n_cars, vehicle_dofs) = match record {
             Record::Full => (n_cars, N_DOF),
-            Record::Metrics => (n_cars.min(1), 1),
+            Record::Metrics => (n_cars, 1),
         };
         Self {
             dt: cfg.solver.dt,
@@ -144,6 +168,10 @@ impl RunResult {
             window: cfg.output.window,
             band_limit: cfg.output.band_limit,
             indices: cfg.output.indices.clone(),
+            deck: (st.layers.len() > 1)
+                .then(|| layers.iter().position(|&l| l + 1 == st.layers.len()))
+                .flatten(),
+            deck_band: cfg.output.deck_band,
         }
     }
 
@@ -179,8 +207,11 @@ impl RunResult {
     /// Metrics in SI units at the first observation point: for every layer
     /// `{name}_disp_max`, `{name}_acc_max`, `{name}_acc_rms`, `{name}_acc_settle` (s, 5 %
     /// rule); for the first car `car_disp_max`, `car_acc_max`, `car_acc_rms` and its ride
-    /// comfort `car_comfort_aw` (ISO 2631-1 a_w of the raw record, at sampling rates ≥ 400 Hz); and
-    /// `contact_force_max`, `contact_force_min`, `contact_loss_events`.
+    /// comfort `car_comfort_aw` (ISO 2631-1 a_w of the raw record, at sampling rates ≥ 400 Hz),
+    /// and each further car's `car{k}_comfort_aw`; the deck acceleration `deck_acc_max` (the
+    /// bottom layer's, low-passed at `output.deck_band`, EN 1990 A2); `contact_force_max`,
+    /// `contact_force_min`, `contact_loss_events` over all wheels and each wheel's
+    /// `wheel{w}_force_max`, `wheel{w}_force_min`.
     ///
     /// With an analysis window ([`RunResult::window`]) every metric is taken over the steps
     /// inside it; settle times are still counted from t = 0.
@@ -221,18 +252,18 @@ impl RunResult {
             for (s, v) in CAR_INDICES.iter().zip([amplitude(d), amplitude(a), rms(a)]) {
                 m.insert(s.to_string(), v);
             }
-            let wanted = self
-                .indices
-                .as_ref()
-                .is_none_or(|k| k.iter().any(|n| n == COMFORT));
-            if wanted && 1.0 / self.dt >= crate::comfort::MIN_RATE {
-                // weighted from the window's start, as vtb.comfort weights a windowed record
-                let raw = &self.vehicle_dof_acc(0, 0)[steps.clone()];
-                m.insert(
-                    COMFORT.to_string(),
-                    crate::comfort::weighted_rms(raw, self.dt),
-                );
+            for k in 0..self.n_cars {
+                let name = car_comfort(k);
+                if self.wants(&name) && 1.0 / self.dt >= crate::comfort::MIN_RATE {
+                    // weighted from the window's start, as vtb.comfort weights a windowed record
+                    let raw = &self.vehicle_dof_acc(k, 0)[steps.clone()];
+                    m.insert(name, crate::comfort::weighted_rms(raw, self.dt));
+                }
             }
+        }
+        if let Some(d) = self.deck.filter(|_| self.wants(DECK)) {
+            let a = low_pass(&self.layer_acc(d, 0), self.deck_band, self.dt);
+            m.insert(DECK.to_string(), amplitude(&a[steps.clone()]));
         }
         if self.n_wheels > 0 {
             let nw = self.n_wheels;
@@ -250,11 +281,29 @@ impl RunResult {
             for (s, v) in CONTACT_INDICES.iter().zip([hi, lo, events as f64]) {
                 m.insert(s.to_string(), v);
             }
+            for w in 0..nw {
+                let f = &self.wheel_force(w)[steps.clone()];
+                let (lo, hi) = f
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(*v), hi.max(*v))
+                    });
+                for (s, v) in WHEEL_INDICES.iter().zip([hi, lo]) {
+                    m.insert(format!("wheel{w}_{s}"), v);
+                }
+            }
         }
         if let Some(keep) = &self.indices {
             m.retain(|k, _| keep.contains(k));
         }
         m
+    }
+
+    /// Whether `output.indices` asks for `name` (every index without it).
+    fn wants(&self, name: &str) -> bool {
+        self.indices
+            .as_ref()
+            .is_none_or(|k| k.iter().any(|n| n == name))
     }
 
     /// The steps inside the analysis window (all steps without one).
