@@ -118,3 +118,27 @@ def test_tids_around_refuses_positions_off_the_rail_instead_of_moving_them():
     assert e.value.field == "count"
     t = vtb.tids_around(c, x=156.5)  # the last ten bays fit exactly
     assert t.x0 - 0.32 >= 0 and t.x0 + (t.count - 1) * t.spacing + 0.32 <= 160.0 + 1e-9
+
+
+def test_a_tuned_mass_damper_splits_the_mode_it_is_tuned_to():
+    """A damper whose inerter goes to the ground is a tuned mass damper (mass b_t). Tuned to the
+    bridge's first mode at a point of that mode, the full eigen-solution with the damper
+    against the closed form of the mode reduced to one DOF plus the damper:
+    (ω_s² + φ²k − ω²)(k − mω²) = φ²k², φ the mass-normalised mode at the damper."""
+    cfg = vtb.paper_config()
+    cfg.discretisation.method = "fem"
+    plain = vtb.modes(cfg, 7.0)
+    f1, x, m = plain.frequencies[0], 16.0, 200.0
+    phi = float(np.ravel(plain.displacement("bridge", x, mode=0))[0])
+    k = m * (2 * math.pi * f1) ** 2
+    cfg.tids = vtb.TIDs(inertance=m, stiffness=k, damping=0.0, count=1, x0=x, spacing=0.64, upper="bridge", lower="ground")
+    got = vtb.modes(cfg, 7.0).frequencies[:2]
+    ws2 = (2 * math.pi * f1) ** 2
+    w2 = np.sort(np.roots([m, -(m * (ws2 + phi**2 * k) + k), (ws2 + phi**2 * k) * k - phi**2 * k**2]).real)
+    want = np.sqrt(w2) / (2 * math.pi)
+    assert got == pytest.approx(want, rel=5e-4)  # the neighbouring modes (6.4 Hz) shift both a little
+    assert got[1] - got[0] == pytest.approx(want[1] - want[0], rel=0.01)
+    assert vtb.simulate(cfg.copy(), progress=False).metrics()["deck_acc_max"] > 0
+    cfg.tids.upper = "ground"
+    with pytest.raises(vtb.ConfigError, match="tids.upper"):
+        cfg.validate()

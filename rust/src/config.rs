@@ -476,7 +476,9 @@ pub struct TidConfig {
     /// The layer the springs attach to (name, no unit).
     #[serde(default = "default_tid_upper")]
     pub upper: String,
-    /// The layer the inerters attach to (name, no unit).
+    /// The layer the inerters attach to (name, no unit), or `"ground"`: an inerter to the
+    /// fixed ground is a mass b_t on the internal node, so the device is a tuned mass damper
+    /// hanging from `upper` (mass b_t, spring k_t, dashpot c_t).
     #[serde(default = "default_tid_lower")]
     pub lower: String,
 }
@@ -1260,11 +1262,14 @@ impl Config {
                 "no layer of that name",
             )
         })?;
+        if t.lower == GROUND {
+            return Ok(());
+        }
         let lower = self.layer_index(&t.lower).ok_or_else(|| {
             VtbError::config(
                 "tids.lower",
                 format!("{:?}", t.lower),
-                "no layer of that name",
+                "no layer of that name (or \"ground\")",
             )
         })?;
         if upper == lower {

@@ -127,18 +127,17 @@ impl Structure {
 
     /// Tuned inerter dampers (docs/model.md §5): DOF `first + i` is damper i's internal node; spring
     /// and dashpot from the upper layer's point to it, inerter from it to the lower layer's
-    /// point, all through the layers' shape vectors (g̃ on a hybrid rail).
+    /// point (none for the ground, which does not move), all through the layers' shape
+    /// vectors (g̃ on a hybrid rail).
     fn tid_attachments(&self, t: &TidConfig, cfg: &Config, first: usize) -> Vec<Attachment> {
-        let (upper, lower) = (
-            cfg.layer_index(&t.upper).expect("validated"),
-            cfg.layer_index(&t.lower).expect("validated"),
-        );
+        let upper = cfg.layer_index(&t.upper).expect("validated");
+        let lower = cfg.layer_index(&t.lower);
         (0..t.count)
             .map(|i| {
                 let x = t.x0 + i as f64 * t.spacing;
                 Attachment {
                     upper: self.shape(upper, x),
-                    lower: self.shape(lower, x),
+                    lower: lower.map_or_else(Shape::default, |l| self.shape(l, x)),
                     node: first + i,
                     stiffness: t.stiffness,
                     damping: t.damping,
