@@ -39,7 +39,7 @@ def test_the_fast_model_reports_named_indices_with_their_bits():
 
 def test_an_unknown_index_is_refused_naming_it():
     cfg = _configs()["hybrid"]
-    cfg.output.indices = ["rail_acc_max", "deck_acc_max"]
+    cfg.output.indices = ["rail_acc_max", "deck_acc_rms"]
     with pytest.raises(vtb.ConfigError) as e:
         vtb.simulate(cfg)
-    assert e.value.field == "output.indices[1]" and "deck_acc_max" in str(e.value)
+    assert e.value.field == "output.indices[1]" and "deck_acc_rms" in str(e.value)

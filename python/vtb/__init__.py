@@ -37,6 +37,7 @@ from .simulate import Result, assembled_matrices, irregularity_profile, load, me
 from .studies import StudyResult, get_field, index_names, set_field, study
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
 from .track import Modes, decay_rate, deck_band, modes, receptance
+from .spans import spans
 from .optimize import OptimizationResult, ParetoResult, optimize
 from .robust import DesignEvaluation, evaluate_design, evaluate_designs
 from .tables import metrics_table, read_parquet
@@ -48,6 +49,6 @@ __all__ = [
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
-    "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
+    "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
     "metrics_table", "read_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
 ]
