@@ -30,7 +30,8 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "defect_impacts.py", "receptance_check.py", "speed_study.py"]
+    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "defect_impacts.py", "receptance_check.py", "speed_study.py",
+                       "viaduct_passage.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
 
@@ -87,6 +88,15 @@ def test_defect_impacts_example():
     smooth = float(rows.pop("smooth rail")[0])
     assert all(float(r[0]) > 1.3 * smooth for r in rows.values())
     assert float(rows["wheel flat (30 mm, wheel 0)"][3]) > 20
+
+
+def test_viaduct_passage_example():
+    """The tuned mass damper lowers the deck's resonance peak; the passage reports each car's
+    comfort and the deck acceleration in the EN 1990 band."""
+    text = _run("viaduct_passage.py")
+    gain = float(re.search(r"\(([+-][\d.]+) dB\)", text).group(1))
+    assert gain < -3.0
+    assert "EN 1990 band 30 Hz" in text and text.count("comfort a_w car 0") == 2
 
 
 def test_no_page_or_generated_report_carries_an_absolute_path():

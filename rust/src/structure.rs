@@ -332,24 +332,17 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
         .collect()
 }
 
-/// The points where discrete couplings and dampers attach to the layer `name`: the nodes of
-/// an aligned finite-element mesh.
+/// The points where discrete couplings attach to the layer `name`: the nodes of an aligned
+/// finite-element mesh. Dampers are left out: the mesh, and so a synthesis reduction built on
+/// it, is the same with and without them (a damper between nodes acts through the element's
+/// shape functions; the presets put theirs on nodes).
 fn coupling_points(cfg: &Config, name: &str) -> Vec<f64> {
-    let mut pts: Vec<f64> = cfg
-        .structure
+    cfg.structure
         .couplings
         .iter()
         .filter(|c| c.kind == CouplingKind::Discrete && (c.upper == name || c.lower == name))
         .flat_map(|c| c.positions.iter().copied())
-        .collect();
-    if let Some(t) = cfg
-        .tids
-        .as_ref()
-        .filter(|t| t.upper == name || t.lower == name)
-    {
-        pts.extend((0..t.count).map(|i| t.x0 + i as f64 * t.spacing));
-    }
-    pts
+        .collect()
 }
 
 /// M, K and C of the layers and couplings.
