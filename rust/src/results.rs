@@ -319,3 +319,38 @@ impl RunResult {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets;
+
+    /// A train's indices: every car's comfort, every wheelset's force extremes and the deck's
+    /// acceleration; a single layer has no deck.
+    #[test]
+    fn a_train_has_indices_per_car_and_per_wheel() {
+        let mut cfg = presets::paper();
+        let mut second = cfg.vehicles[0].clone();
+        second.x_front += 25.0;
+        cfg.vehicles.push(second);
+        let names = index_names(&cfg);
+        for n in [
+            "car_comfort_aw",
+            "car1_comfort_aw",
+            "wheel0_force_max",
+            "wheel7_force_min",
+            DECK,
+        ] {
+            assert!(names.iter().any(|k| k == n), "{n}");
+        }
+        assert!(
+            !names
+                .iter()
+                .any(|k| k == "car2_comfort_aw" || k == "wheel8_force_max")
+        );
+        cfg.output.indices = Some(vec![DECK.into()]);
+        assert_eq!(cfg.index_layers(), vec![cfg.structure.layers.len() - 1]);
+        cfg.structure.layers.truncate(1);
+        assert!(!index_names(&cfg).iter().any(|k| k == DECK));
+    }
+}
