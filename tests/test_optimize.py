@@ -11,15 +11,6 @@ from vtb.presets import ARTICLE_RAIL_ACC
 
 
 @pytest.fixture(scope="module")
-def short():
-    c = vtb.paper_config()
-    c.solver.t_end = 0.15
-    c.output.points = [8.0]
-    c.tids = vtb.tids_around(c, count=2, x=8.0)
-    return c
-
-
-@pytest.fixture(scope="module")
 def result(short):
     return vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False)
 

@@ -18,16 +18,6 @@ distributed = pytest.importorskip("dask.distributed")
 
 
 @pytest.fixture(scope="module")
-def short():
-    """The article's case cut to 0.15 s, observed 8 m into the bridge, two dampers there."""
-    c = vtb.paper_config()
-    c.solver.t_end = 0.15
-    c.output.points = [8.0]
-    c.tids = vtb.tids_around(c, count=2, x=8.0)
-    return c
-
-
-@pytest.fixture(scope="module")
 def cluster():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cl:
         with distributed.Client(cl) as client:

@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import vtb
+from conftest import short_case
 from vtb import studies as studies_mod
 from vtb.optimize import ARTICLE_CONSTRAINTS, ARTICLE_OBJECTIVES, ARTICLE_VARIABLES
 from vtb.tid_sweep import METRICS
@@ -19,12 +20,8 @@ from vtb.tid_sweep import METRICS
 
 @pytest.fixture(scope="module")
 def short():
-    """The article's case cut to 0.1 s, observed 8 m into the bridge, two dampers there."""
-    c = vtb.paper_config()
-    c.solver.t_end = 0.1
-    c.output.points = [8.0]
-    c.tids = vtb.tids_around(c, count=2, x=8.0)
-    return c
+    """The shared short case at 0.1 s."""
+    return short_case(0.1)
 
 
 GRID = {"speed": [70.0, 80.0], "structure.couplings[0].stiffness": [4e7, 6e7]}

@@ -17,16 +17,6 @@ GRID = dict(b_t=[2.0, 5.0], k_t=[1e8, 2e8], c_t=[1e3])
 
 
 @pytest.fixture(scope="module")
-def short():
-    """The article's case cut to 0.15 s, observed 8 m into the bridge, two dampers there."""
-    c = vtb.paper_config()
-    c.solver.t_end = 0.15
-    c.output.points = [8.0]
-    c.tids = vtb.tids_around(c, count=2, x=8.0)
-    return c
-
-
-@pytest.fixture(scope="module")
 def reference(short):
     return vtb.sweep(short, **GRID, progress=False)
 
