@@ -304,7 +304,8 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
                 f"{f_art:.0f} Hz vs {pp_art:.0f} Hz (Euler–Bernoulli); converged sweep optima {pairs[1][0]:.0f} Hz (calibrated) and {pairs[2][0]:.0f} Hz (no loss), "
                 f"robust optimum {f_rob:.0f} Hz, vs {pp_conv:.0f} Hz (Timoshenko); f_t/f_pp − 1 = "
                 + ", ".join(f"{100 * (f / pp - 1):+.1f} % ({'near' if n else 'not near'})" for (f, pp), n in zip(pairs, near))
-                + f". The converged sweep's grid spans {min(plan['grid']['f']):g}–{max(plan['grid']['f']):g} × f_pp, so an optimum on its edge may lie beyond it."))
+                + f". The converged sweep crosses every b_t with the k_t that put f_t at {min(plan['grid']['f']):g}–{max(plan['grid']['f']):g} × f_pp for some b_t, "
+                f"so its working frequencies span {_sweep_band(plan['grid'], pp_conv)[0]:.0f}–{_sweep_band(plan['grid'], pp_conv)[1]:.0f} Hz; an optimum on that span's edge may lie beyond it."))
 
     ch = article.get("chosen") or {}
     car = (article.get("car") or {}).get("car_acc_max")
@@ -355,6 +356,13 @@ def _smooth_text(levels: list) -> list:
         "contact grows without limit as the rail mesh and the time step are refined, this index moves by under 0.5 % "
         "(the documentation's page on the contact patch gives the refinement).",
     ]
+
+
+def _sweep_band(grid: dict, pp: float) -> tuple:
+    """The lowest and highest working frequency (Hz) of a chain's sweep: every b_t crossed with
+    the k_t = b(2π·f·f_pp)² of every b and f of the grid, so f_t = f·f_pp·√(b/b_t)."""
+    b, f = grid["b_t"], grid["f"]
+    return min(f) * pp * math.sqrt(min(b) / max(b)), max(f) * pp * math.sqrt(max(b) / min(b))
 
 
 def _report(out, quick, plan, times, this_total, article, factor, levels, chains, rs, ropt, designs, held, verdicts, speeds) -> None:
