@@ -1,6 +1,6 @@
 """The step-up joint's impact under refinement of the time step, seen through the wheel (the
 default) and as the raw step (docs/defects.md): the fast model at 80 m/s, a 0.5 mm step up at
-x = 80 m sampled at 0.25 mm. About 40 s on two cores.
+x = 80 m sampled at 0.25 mm. 34 s on the 2-core machine (2026-12-02, with a test run beside it).
 
     python benches/defect_convergence.py
 """
