@@ -38,6 +38,8 @@ from .studies import StudyResult, get_field, index_names, set_field, study
 from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
 from .track import Modes, decay_rate, deck_band, modes, receptance
 from .spans import spans
+from .trains import TrainInfo, consist_extent, train, trains
+from .zones import bridge_extent, track_zones
 from .optimize import OptimizationResult, ParetoResult, optimize
 from .robust import DesignEvaluation, evaluate_design, evaluate_designs
 from .tables import metrics_table, read_parquet
@@ -51,4 +53,5 @@ __all__ = [
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
     "metrics_table", "read_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
+    "train", "trains", "TrainInfo", "consist_extent", "track_zones", "bridge_extent",
 ]

@@ -72,6 +72,9 @@ class Layer(StrictFields):
     shear_modulus: Optional[float] = _default("LayerConfig", "shear_modulus")
     shear_coefficient: Optional[float] = _default("LayerConfig", "shear_coefficient")
     element_length: Optional[float] = _default("LayerConfig", "element_length")
+    start: Optional[float] = _default("LayerConfig", "start")
+    end: Optional[float] = _default("LayerConfig", "end")
+    joints: list = _default("LayerConfig", "joints")
 
 
 @documented("CouplingConfig")
@@ -80,7 +83,8 @@ class Coupling(StrictFields):
     """Spring–dashpot connection of layer ``upper`` to layer ``lower`` (or ``"ground"``).
 
     ``kind="discrete"``: point springs at ``positions`` (stiffness N/m, damping N·s/m each);
-    ``kind="continuous"``: distributed over the length (N/m², N·s/m²).
+    ``kind="continuous"``: distributed (N/m², N·s/m²) over [``start``, ``end``], by default
+    the part of the structure both layers cover.
     """
 
     upper: str
@@ -89,6 +93,8 @@ class Coupling(StrictFields):
     stiffness: float
     damping: float = _default("CouplingConfig", "damping")
     positions: list = _default("CouplingConfig", "positions")
+    start: Optional[float] = _default("CouplingConfig", "start")
+    end: Optional[float] = _default("CouplingConfig", "end")
 
     @classmethod
     def grid(cls, upper: str, lower: str, stiffness: float, damping: float, spacing: float, length: float, first: float = 0.0) -> "Coupling":
@@ -100,7 +106,8 @@ class Coupling(StrictFields):
 @documented("StructureConfig")
 @dataclass
 class Structure(StrictFields):
-    """The track–bridge beam stack: layers of one common length, joined by couplings."""
+    """The track–bridge beam stack over [0, ``length``]: layers (each over the whole length
+    or, with finite elements, over [``start``, ``end``]) joined by couplings."""
 
     length: float
     layers: list
@@ -173,6 +180,8 @@ class Solver(StrictFields):
 
     dt: float = _default("SolverConfig", "dt")
     t_end: Optional[float] = _default("SolverConfig", "t_end")
+    tail: Optional[float] = _default("SolverConfig", "tail")
+    edge_ramp: float = _default("SolverConfig", "edge_ramp")
     end_margin: float = _default("SolverConfig", "end_margin")
     gravity: float = _default("SolverConfig", "gravity")
     contact_tol: float = _default("SolverConfig", "contact_tol")

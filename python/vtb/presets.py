@@ -121,10 +121,10 @@ def tids_around(config: Config, inertance: float = 5.0, stiffness: float = 2e8, 
 
 def crh3_car(x_front: float, motor: bool = False) -> Vehicle:
     """A CRH3 car, parameter set A (trailer, or motor car), leading wheelset at ``x_front``."""
-    v = paper_config().vehicles[0]
+    from .trains import train
+
+    v = train("crh3", cars=2)[1 if motor else 0]  # the formation starts trailer, motor
     v.x_front = x_front
-    if motor:
-        v.m_c, v.m_t, v.j_t, v.k_s, v.c_s, v.k_p, v.c_p = 4.8e4, 3.2e3, 7.2e3, 8.0e5, 9.0e4, 2.08e6, 6.0e4
     return v
 
 

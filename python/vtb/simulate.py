@@ -92,7 +92,13 @@ def irregularity_profile(cfg: Config) -> SampledProfile:
         return SampledProfile(0.0, 1.0, np.zeros(0), [])
     budget = _real(getattr(cfg.solver, "memory_budget", None))
     radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(WHEELS_PER_CAR)]
-    x0, dx, values, treads = cfg.irregularity.sample(-_PROFILE_MARGIN, L + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
+    # Wheels may start before the structure and end beyond it (on a rigid track).
+    try:
+        travel = _core.wheel_travel(cfg.to_core_json())
+    except (VtbError, ValueError, TypeError):  # refused later, naming the field
+        travel = None
+    lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
+    x0, dx, values, treads = cfg.irregularity.sample(lo - _PROFILE_MARGIN, hi + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
     if treads and not values.size:
         values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
     return SampledProfile(x0, dx, values, treads)

@@ -503,46 +503,45 @@ impl ModalBasis {
 /// element's shear parameter φ = 12EI/(κGAℓ²) is 0 (Euler–Bernoulli).
 #[derive(Clone, Debug)]
 pub struct FemBasis {
-    pub length: f64,
-    /// Node positions, increasing, from 0 to `length`.
+    /// Node positions, increasing, from the layer's start to its end (0 and L unless the
+    /// layer covers part of the structure).
     pub nodes: Vec<f64>,
     /// Shear parameter φ of each element (0 for Euler–Bernoulli).
     pub phi: Vec<f64>,
 }
 
 impl FemBasis {
-    /// `n` equal elements.
-    pub fn uniform(length: f64, n: usize) -> Self {
+    /// `n` equal elements over [start, end].
+    pub fn uniform(start: f64, end: f64, n: usize) -> Self {
         let nodes = (0..=n)
             .map(|i| {
                 if i == n {
-                    length
+                    end
                 } else {
-                    length * i as f64 / n as f64
+                    start + (end - start) * i as f64 / n as f64
                 }
             })
             .collect();
         Self {
-            length,
             nodes,
             phi: vec![0.0; n],
         }
     }
 
-    /// Nodes on every breakpoint (coupling points; 0 and `length` are added) and each
-    /// interval between breakpoints split into the fewest equal elements no longer than
-    /// `max_len`. Breakpoints closer than 1e-9·length merge.
-    pub fn aligned(length: f64, max_len: f64, breakpoints: &[f64]) -> Self {
-        let tol = 1e-9 * length;
+    /// Nodes on every breakpoint within (start, end) (coupling points; the ends are added)
+    /// and each interval between breakpoints split into the fewest equal elements no longer
+    /// than `max_len`. Breakpoints closer than 1e-9·end merge.
+    pub fn aligned(start: f64, end: f64, max_len: f64, breakpoints: &[f64]) -> Self {
+        let tol = 1e-9 * end.abs().max(end - start);
         let mut bp: Vec<f64> = breakpoints
             .iter()
             .copied()
-            .filter(|&x| x > tol && x < length - tol)
+            .filter(|&x| x > start + tol && x < end - tol)
             .collect();
         bp.sort_by(f64::total_cmp);
-        let mut nodes = vec![0.0];
-        for &x in bp.iter().chain(std::iter::once(&length)) {
-            let a = *nodes.last().expect("starts with 0");
+        let mut nodes = vec![start];
+        for &x in bp.iter().chain(std::iter::once(&end)) {
+            let a = *nodes.last().expect("starts with the start");
             if x - a <= tol {
                 continue;
             }
@@ -557,10 +556,44 @@ impl FemBasis {
         }
         let n = nodes.len() - 1;
         Self {
-            length,
             nodes,
             phi: vec![0.0; n],
         }
+    }
+
+    /// First node (m).
+    pub fn start(&self) -> f64 {
+        self.nodes[0]
+    }
+
+    /// Last node (m).
+    pub fn end(&self) -> f64 {
+        *self.nodes.last().expect("a mesh has nodes")
+    }
+
+    /// x lies on the mesh (its shape functions are zero elsewhere).
+    #[inline]
+    pub fn covers(&self, x: f64) -> bool {
+        x >= self.start() && x <= self.end()
+    }
+
+    /// Cuts the mesh at each of `joints` (which must be nodes): the node is doubled, with a
+    /// zero-length element between the two, so nothing passes from one side to the other. A
+    /// point at a joint belongs to the element on its right.
+    pub fn with_joints(mut self, joints: &[f64]) -> Self {
+        for &x in joints {
+            if let Some(i) = self.nodes.iter().position(|&n| n == x) {
+                self.nodes.insert(i, x);
+                self.phi.insert(i, 0.0);
+            }
+        }
+        self
+    }
+
+    /// Element e has no length (a joint).
+    #[inline]
+    fn is_joint(&self, e: usize) -> bool {
+        self.nodes[e + 1] == self.nodes[e]
     }
 
     /// Makes the elements Timoshenko elements of a beam with bending stiffness `ei` and shear
@@ -568,9 +601,16 @@ impl FemBasis {
     pub fn with_shear(mut self, ei: f64, kga: f64) -> Self {
         for e in 0..self.n_elements() {
             let l = self.nodes[e + 1] - self.nodes[e];
-            self.phi[e] = 12.0 * ei / (kga * l * l);
+            if l > 0.0 {
+                self.phi[e] = 12.0 * ei / (kga * l * l);
+            }
         }
         self
+    }
+
+    /// The elements with a length (all but the joints').
+    pub fn elements(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.n_elements()).filter(|&e| !self.is_joint(e))
     }
 
     pub fn n_elements(&self) -> usize {
@@ -608,6 +648,9 @@ impl FemBasis {
     /// element splits into two whose end stiffnesses (closed form, exact for Timoshenko
     /// beams) condense onto x. Euler–Bernoulli: a³b³/(3EIℓ³).
     pub fn local_flexibility(&self, ei: f64, x: f64) -> f64 {
+        if !self.covers(x) {
+            return 0.0;
+        }
         self.local_flexibility_in(self.element_of(x), ei, x)
     }
 
@@ -634,9 +677,9 @@ impl FemBasis {
     /// Pieces of the patch [x − a, x + a] cut at the nodes (and at 0 and `length`), each with
     /// its element, for integrals over a distributed contact.
     fn patch_pieces(&self, x: f64, a: f64) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
-        let (lo, hi) = ((x - a).max(0.0), (x + a).min(self.length));
+        let (lo, hi) = ((x - a).max(self.start()), (x + a).min(self.end()));
         let (e0, e1) = (self.element_of(lo), self.element_of(hi));
-        (e0..=e1).filter_map(move |e| {
+        (e0..=e1).filter(move |_| hi > lo).filter_map(move |e| {
             let (p, q) = (lo.max(self.nodes[e]), hi.min(self.nodes[e + 1]));
             (q > p).then_some((e, p, q))
         })
@@ -669,9 +712,10 @@ impl FemBasis {
     /// centred at x: ∫N(x + s)·q(s)ds/∫q(s)ds, exact (16 Gauss points per element piece for a
     /// quintic integrand). It covers the DOFs of every element the patch touches; `out.values`
     /// is resized to them (no allocation once it has the capacity).
+    /// A patch wholly off the mesh has a zero shape.
     pub fn patch_into(&self, x: f64, a: f64, out: &mut Shape) {
-        let (lo, hi) = ((x - a).max(0.0), (x + a).min(self.length));
-        let (e0, e1) = (self.element_of(lo), self.element_of(hi));
+        let (lo, hi) = ((x - a).max(self.start()), (x + a).min(self.end()));
+        let (e0, e1) = (self.element_of(lo), self.element_of(hi.max(lo)));
         out.start = 2 * e0;
         out.values.clear();
         out.values.resize(2 * (e1 - e0 + 2), 0.0);
@@ -707,14 +751,15 @@ impl FemBasis {
 
     /// Most shape-vector entries of a patch of half-length `a` anywhere on the mesh.
     pub fn patch_len(&self, a: f64) -> usize {
-        let shortest = (0..self.n_elements())
+        let shortest = self
+            .elements()
             .map(|e| self.nodes[e + 1] - self.nodes[e])
             .fold(f64::INFINITY, f64::min);
         2 * ((2.0 * a / shortest).ceil() as usize + 2)
     }
 
     pub fn pieces(&self) -> Vec<Piece> {
-        (0..self.n_elements())
+        self.elements()
             .map(|e| Piece {
                 a: self.nodes[e],
                 b: self.nodes[e + 1],
@@ -792,7 +837,15 @@ impl LayerBasis {
         match self {
             LayerBasis::Modal(b) => {
                 out.start = 0;
-                b.eval_into(x, &mut out.values);
+                if (0.0..=b.length).contains(&x) {
+                    b.eval_into(x, &mut out.values);
+                } else {
+                    out.values.fill(0.0);
+                }
+            }
+            LayerBasis::Fem(b) if !b.covers(x) => {
+                out.start = 0;
+                out.values.fill(0.0);
             }
             LayerBasis::Fem(b) => {
                 let e = b.element_of(x);
@@ -1030,10 +1083,9 @@ mod tests {
     /// A rail mesh like the converged preset's: Timoshenko elements of 32 mm with a node on
     /// every fastener, one shorter element to exercise uneven nodes.
     fn rail_mesh() -> FemBasis {
-        let mut nodes = FemBasis::uniform(1.28, 40).nodes;
+        let mut nodes = FemBasis::uniform(0.0, 1.28, 40).nodes;
         nodes.insert(21, 0.6545);
         FemBasis {
-            length: 1.28,
             phi: vec![0.0; nodes.len() - 1],
             nodes,
         }
@@ -1049,11 +1101,7 @@ mod tests {
             .map(|i| {
                 let s = (-a + (i as f64 + 0.5) * h) / a;
                 let xs = x + s * a;
-                if (0.0..=mesh.length).contains(&xs) {
-                    1.0 - s * s
-                } else {
-                    0.0
-                }
+                if mesh.covers(xs) { 1.0 - s * s } else { 0.0 }
             })
             .collect();
         let total: f64 = w.iter().sum();
@@ -1074,7 +1122,7 @@ mod tests {
             assert!(got.values.len() <= mesh.patch_len(a));
             let mut want = vec![0.0; mesh.n_dofs()];
             brute_patch(&mesh, x, a, |xs, w| {
-                let s = basis.shape(xs.min(mesh.length));
+                let s = basis.shape(xs.min(mesh.end()));
                 for (k, v) in s.values.iter().enumerate() {
                     want[s.start + k] += w * v;
                 }

@@ -86,6 +86,20 @@ pub struct LayerConfig {
     pub element_length: Option<f64>,
     /// Rayleigh damping of the layer: a ratio (−) at two frequencies (Hz), or α (1/s) and β (s).
     pub damping: RayleighConfig,
+    /// Where the layer begins (m); 0 when absent. A layer over part of the structure (a
+    /// bridge girder between approach embankments) needs finite elements; its ends are free
+    /// unless couplings hold them.
+    #[serde(default)]
+    pub start: Option<f64>,
+    /// Where the layer ends (m); `structure.length` when absent.
+    #[serde(default)]
+    pub end: Option<f64>,
+    /// Positions (m) where the layer is cut: a joint between simply supported spans or slabs,
+    /// across which no displacement, rotation, shear or moment passes (only the couplings on
+    /// either side hold the two ends). Finite elements only; a point exactly at a joint
+    /// belongs to the part on its right.
+    #[serde(default)]
+    pub joints: Vec<f64>,
 }
 
 /// Rayleigh damping C = αM + βK of one layer.
@@ -140,6 +154,13 @@ pub struct CouplingConfig {
     /// Point positions for discrete couplings (m).
     #[serde(default)]
     pub positions: Vec<f64>,
+    /// Where a continuous coupling begins (m); the start of the part both layers cover (of the
+    /// upper layer, for the ground) when absent. Finite-element layers only.
+    #[serde(default)]
+    pub start: Option<f64>,
+    /// Where a continuous coupling ends (m); the end of the part both layers cover when absent.
+    #[serde(default)]
+    pub end: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
@@ -332,9 +353,22 @@ pub struct SolverConfig {
     /// Newmark time step (s).
     #[serde(default = "default_dt")]
     pub dt: f64,
-    /// End time (s). Default: when the leading wheel (or force) reaches L − `end_margin`.
+    /// End time (s). Default: when the leading wheel (or force) reaches L − `end_margin`, or
+    /// `tail` after the last one has left the structure.
     #[serde(default)]
     pub t_end: Option<f64>,
+    /// Free vibration (s) recorded after the last wheel or force has left the structure
+    /// (passed x = L): the default end time becomes that moment plus `tail`. Wheels beyond
+    /// x = L run on a rigid track and no longer load the structure.
+    #[serde(default)]
+    pub tail: Option<f64>,
+    /// Length (m) at each end of the rail over which a wheel's force is handed between the
+    /// rail and the rigid track beyond the structure: the rail carries a raised-cosine share
+    /// of it, 0 at the rail's end and 1 at `edge_ramp` from it, so that wheels join and leave
+    /// the structure without a step (docs/zones.md). 0: no hand-over; a wheel crossing an end
+    /// meets the track's static deflection as a step. Finite-element or modal rails.
+    #[serde(default = "default_edge_ramp")]
+    pub edge_ramp: f64,
     /// Distance kept between the leading wheel and the end of the structure for the default
     /// end time (m).
     #[serde(default = "default_end_margin")]
@@ -370,6 +404,9 @@ pub struct SolverConfig {
 fn default_dt() -> f64 {
     5e-5
 }
+fn default_edge_ramp() -> f64 {
+    0.0
+}
 fn default_end_margin() -> f64 {
     1.0
 }
@@ -395,6 +432,8 @@ impl Default for SolverConfig {
         Self {
             dt: default_dt(),
             t_end: None,
+            tail: None,
+            edge_ramp: default_edge_ramp(),
             end_margin: default_end_margin(),
             fade_in: default_fade_in(),
             gravity: default_gravity(),
@@ -685,18 +724,26 @@ impl Config {
         }
     }
 
-    /// Time (s) at which the leading wheel/force reaches L − end_margin.
+    /// Time (s) at which the leading wheel/force reaches L − end_margin, or with
+    /// `solver.tail` the last one has passed L plus the tail.
     fn lead_time(&self) -> f64 {
-        let lead = self
-            .vehicles
-            .iter()
-            .map(|v| v.x_front)
-            .chain(self.forces.iter().map(|f| f.x0))
-            .fold(f64::NEG_INFINITY, f64::max);
-        if self.speed > 0.0 && lead.is_finite() {
-            ((self.structure.length - self.solver.end_margin - lead) / self.speed).max(0.0)
-        } else {
-            0.0
+        let positions = || {
+            self.vehicles
+                .iter()
+                .flat_map(|v| v.wheel_offsets())
+                .chain(self.forces.iter().map(|f| f.x0))
+        };
+        let (lead, last) = (
+            positions().fold(f64::NEG_INFINITY, f64::max),
+            positions().fold(f64::INFINITY, f64::min),
+        );
+        if !(self.speed > 0.0 && lead.is_finite()) {
+            return 0.0;
+        }
+        let l = self.structure.length;
+        match self.solver.tail {
+            Some(tail) => ((l - last) / self.speed).max(0.0) + tail,
+            None => ((l - self.solver.end_margin - lead) / self.speed).max(0.0),
         }
     }
 
@@ -726,6 +773,54 @@ impl Config {
                 })
                 .collect(),
         }
+    }
+
+    /// The stretch (m) the wheels roll over during the run, from the rearmost wheel's start
+    /// to the leading wheel's end; `None` without vehicles or with a non-finite end time.
+    pub fn wheel_travel(&self) -> Option<(f64, f64)> {
+        let travel = self.speed * self.n_steps() as f64 * self.solver.dt;
+        let offsets = self.vehicles.iter().flat_map(|v| v.wheel_offsets());
+        let lo = offsets.clone().fold(f64::INFINITY, f64::min);
+        let hi = offsets.fold(f64::NEG_INFINITY, f64::max) + travel;
+        (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+    }
+
+    /// [start, end] of layer `i` (m).
+    pub fn extent(&self, i: usize) -> (f64, f64) {
+        let l = &self.structure.layers[i];
+        (
+            l.start.unwrap_or(0.0),
+            l.end.unwrap_or(self.structure.length),
+        )
+    }
+
+    /// [start, end] (m) over which a continuous coupling of validated layers acts.
+    pub fn coupling_range(&self, c: &CouplingConfig) -> (f64, f64) {
+        let (a0, a1) = self.extent(self.layer_index(&c.upper).expect("validated"));
+        let (b0, b1) = self
+            .layer_index(&c.lower)
+            .map_or((a0, a1), |l| self.extent(l));
+        (c.start.unwrap_or(a0.max(b0)), c.end.unwrap_or(a1.min(b1)))
+    }
+
+    /// `x` (field `field`) lies on layer `i`, and not on one of its joints.
+    fn on_layer(&self, field: &str, x: f64, i: usize) -> Result<f64> {
+        let (a, b) = self.extent(i);
+        let layer = &self.structure.layers[i];
+        let name = &layer.name;
+        within(field, x, a, b, &format!("layer {name:?}"))?;
+        if layer
+            .joints
+            .iter()
+            .any(|&j| (x - j).abs() <= 1e-9 * (1.0 + j.abs()))
+        {
+            return Err(VtbError::config(
+                field,
+                x,
+                format!("lies on a joint of layer {name:?}: place it on one side"),
+            ));
+        }
+        Ok(x)
     }
 
     /// Observation points, defaulting to mid-length.
@@ -770,6 +865,7 @@ impl Config {
             positive(&format!("{p}.youngs_modulus"), l.youngs_modulus)?;
             positive(&format!("{p}.inertia"), l.inertia)?;
             self.validate_layer_mesh(l, &p, length)?;
+            self.validate_extent(l, &p, length)?;
             if self.discretisation.method != Method::Fem {
                 if l.modes == 0 {
                     return Err(VtbError::config(
@@ -849,13 +945,20 @@ impl Config {
                         ));
                     }
                     for (j, &x) in c.positions.iter().enumerate() {
-                        within(
-                            &format!("{p}.positions[{j}]"),
-                            x,
-                            0.0,
-                            length,
-                            "the structure",
-                        )?;
+                        let field = format!("{p}.positions[{j}]");
+                        self.on_layer(&field, x, upper)?;
+                        if let Some(lower) = self.layer_index(&c.lower) {
+                            self.on_layer(&field, x, lower)?;
+                        }
+                    }
+                    for (name, v) in [("start", c.start), ("end", c.end)] {
+                        if let Some(v) = v {
+                            return Err(VtbError::config(
+                                format!("{p}.{name}"),
+                                v,
+                                "a discrete coupling acts at its positions; start and end are for continuous ones",
+                            ));
+                        }
                     }
                 }
                 CouplingKind::Continuous => {
@@ -866,6 +969,7 @@ impl Config {
                             "a continuous coupling takes no positions",
                         ));
                     }
+                    self.validate_coupling_range(c, &p, upper)?;
                 }
             }
         }
@@ -906,6 +1010,16 @@ impl Config {
         let sv = &self.solver;
         let dt = positive("solver.dt", sv.dt)?;
         non_negative("solver.end_margin", sv.end_margin)?;
+        if non_negative("solver.edge_ramp", sv.edge_ramp)? > 0.0
+            && self.discretisation.method == Method::Hybrid
+        {
+            return Err(VtbError::config(
+                "solver.edge_ramp",
+                sv.edge_ramp,
+                "the FE–SEA hybrid's rail terms take a wheel's whole force: use 0, or \
+                 discretisation.method = \"fem\" or \"modal\"",
+            ));
+        }
         non_negative("solver.gravity", sv.gravity)?;
         positive("solver.contact_tol", sv.contact_tol)?;
         if sv.contact_max_iter == 0 {
@@ -937,6 +1051,16 @@ impl Config {
                 "None",
                 "an end time is required when speed = 0",
             ));
+        }
+        if let Some(tail) = sv.tail {
+            non_negative("solver.tail", tail)?;
+            if sv.t_end.is_some() {
+                return Err(VtbError::config(
+                    "solver.tail",
+                    tail,
+                    "give either solver.t_end or solver.tail, not both",
+                ));
+            }
         }
         let t_end = self.t_end();
         if !(t_end > 0.0) {
@@ -1001,25 +1125,9 @@ impl Config {
             }
             finite(&format!("{p}.x_front"), v.x_front)?;
             let offs = v.wheel_offsets();
+            // Wheels may start before x = 0 and end beyond L: off the structure they run on a
+            // rigid track (docs/model.md §4).
             let (rear, front) = (offs[3], offs[0] + travel);
-            if rear < -1e-9 {
-                return Err(VtbError::config(
-                    format!("{p}.x_front"),
-                    v.x_front,
-                    format!(
-                        "the rear wheelset starts at x = {rear:.4} m, off the structure [0, {length}]"
-                    ),
-                ));
-            }
-            if front > length + 1e-9 {
-                return Err(VtbError::config(
-                    format!("{p}.x_front"),
-                    v.x_front,
-                    format!(
-                        "the leading wheelset would reach x = {front:.4} m by t_end = {t_end:.4} s, beyond the structure length {length}"
-                    ),
-                ));
-            }
             if !profile.values.is_empty()
                 && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9)
             {
@@ -1035,17 +1143,8 @@ impl Config {
         for (i, f) in self.forces.iter().enumerate() {
             let p = format!("forces[{i}]");
             finite(&format!("{p}.magnitude"), f.magnitude)?;
-            within(&format!("{p}.x0"), f.x0, 0.0, length, "the structure")?;
-            if f.x0 + travel > length + 1e-9 {
-                return Err(VtbError::config(
-                    format!("{p}.x0"),
-                    f.x0,
-                    format!(
-                        "the force would reach x = {:.4} m by t_end, beyond the structure length {length}",
-                        f.x0 + travel
-                    ),
-                ));
-            }
+            // Off its layer a force loads nothing.
+            finite(&format!("{p}.x0"), f.x0)?;
             if let Some(layer) = &f.layer {
                 if self.layer_index(layer).is_none() {
                     return Err(VtbError::config(
@@ -1064,13 +1163,9 @@ impl Config {
             ));
         }
         for (i, &x) in self.output.points.iter().enumerate() {
-            within(
-                &format!("output.points[{i}]"),
-                x,
-                0.0,
-                length,
-                "the structure",
-            )?;
+            for li in self.index_layers() {
+                self.on_layer(&format!("output.points[{i}]"), x, li)?;
+            }
         }
         if let Some([t0, t1]) = self.output.window {
             non_negative("output.window[0]", t0)?;
@@ -1133,6 +1228,99 @@ impl Config {
             self.validate_tids(t, length)?;
         }
         crate::budget::check_model(self)
+    }
+
+    /// A layer's start and end: within the structure, in order, finite elements only.
+    fn validate_extent(&self, l: &LayerConfig, p: &str, length: f64) -> Result<()> {
+        let start = within(
+            &format!("{p}.start"),
+            l.start.unwrap_or(0.0),
+            0.0,
+            length,
+            "the structure",
+        )?;
+        let end = within(
+            &format!("{p}.end"),
+            l.end.unwrap_or(length),
+            0.0,
+            length,
+            "the structure",
+        )?;
+        if end <= start {
+            return Err(VtbError::config(
+                format!("{p}.end"),
+                end,
+                format!("must be greater than the layer's start {start}"),
+            ));
+        }
+        let mut last = start;
+        for (j, &x) in l.joints.iter().enumerate() {
+            let field = format!("{p}.joints[{j}]");
+            within(&field, x, start, end, "the layer")?;
+            if x <= last || x >= end {
+                return Err(VtbError::config(
+                    field,
+                    x,
+                    "joints must lie inside the layer, in increasing order",
+                ));
+            }
+            last = x;
+            if self.discretisation.method != Method::Fem {
+                return Err(VtbError::config(
+                    field,
+                    x,
+                    "a joint needs finite elements (discretisation.method = \"fem\")",
+                ));
+            }
+        }
+        if (start > 0.0 || end < length) && self.discretisation.method != Method::Fem {
+            let field = if start > 0.0 { "start" } else { "end" };
+            return Err(VtbError::config(
+                format!("{p}.{field}"),
+                if start > 0.0 { start } else { end },
+                format!(
+                    "a layer over part of the structure needs finite elements                      (discretisation.method = \"fem\", not {:?}): a modal basis spans the whole length",
+                    self.discretisation.method
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A continuous coupling's range: within the layers it joins, in order; finite elements
+    /// for a range other than the default.
+    fn validate_coupling_range(&self, c: &CouplingConfig, p: &str, upper: usize) -> Result<()> {
+        let (a0, a1) = self.extent(upper);
+        let (b0, b1) = self
+            .layer_index(&c.lower)
+            .map_or((a0, a1), |l| self.extent(l));
+        let (lo, hi) = (a0.max(b0), a1.min(b1));
+        if hi <= lo {
+            return Err(VtbError::config(
+                format!("{p}.lower"),
+                format!("{:?}", c.lower),
+                format!("layers {:?} and {:?} do not overlap", c.upper, c.lower),
+            ));
+        }
+        let what = "the part of the structure both layers cover";
+        let start = within(&format!("{p}.start"), c.start.unwrap_or(lo), lo, hi, what)?;
+        let end = within(&format!("{p}.end"), c.end.unwrap_or(hi), lo, hi, what)?;
+        if end <= start {
+            return Err(VtbError::config(
+                format!("{p}.end"),
+                end,
+                format!("must be greater than the coupling's start {start}"),
+            ));
+        }
+        if (c.start.is_some() || c.end.is_some()) && self.discretisation.method != Method::Fem {
+            return Err(VtbError::config(
+                format!("{p}.{}", if c.start.is_some() { "start" } else { "end" }),
+                c.start.or(c.end).expect("one is set"),
+                "a continuous coupling over part of the structure needs finite elements \
+                 (discretisation.method = \"fem\")",
+            ));
+        }
+        Ok(())
     }
 
     /// Timoshenko properties (both or neither, finite elements only) and the element length.
@@ -1262,6 +1450,7 @@ impl Config {
                 "no layer of that name",
             )
         })?;
+        self.tids_on_layer(t, upper)?;
         if t.lower == GROUND {
             return Ok(());
         }
@@ -1277,6 +1466,24 @@ impl Config {
                 "tids.lower",
                 format!("{:?}", t.lower),
                 "must differ from tids.upper",
+            ));
+        }
+        self.tids_on_layer(t, lower)
+    }
+
+    /// The first and the last damper on layer `i`.
+    fn tids_on_layer(&self, t: &TidConfig, i: usize) -> Result<()> {
+        let last = t.x0 + t.spacing * t.count.saturating_sub(1) as f64;
+        self.on_layer("tids.x0", t.x0, i)?;
+        let (a, b) = self.extent(i);
+        if last > b + 1e-9 {
+            return Err(VtbError::config(
+                "tids.count",
+                t.count,
+                format!(
+                    "the last damper would sit at x = {last:.4} m, off layer {:?} [{a}, {b}]",
+                    self.structure.layers[i].name
+                ),
             ));
         }
         Ok(())

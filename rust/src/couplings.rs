@@ -7,11 +7,17 @@
 //! c·n·nᵀ to C); a continuous one adds ∫k·n·nᵀ dx.
 
 use crate::basis::Shape;
-use crate::layers::{Derivative, Layer, gram_blocks};
+use crate::layers::{Derivative, Layer, gram_blocks_over};
 use crate::sparse::Assembler;
 
-/// Adds `w`·∫ n·nᵀ dx of a continuous connection (b = None: to the ground).
-pub fn add_continuous(asm: &mut Assembler, a: &Layer, b: Option<&Layer>, w: f64) {
+/// Adds `w`·∫ n·nᵀ dx over `range` of a continuous connection (b = None: to the ground).
+pub fn add_continuous(
+    asm: &mut Assembler,
+    a: &Layer,
+    b: Option<&Layer>,
+    w: f64,
+    range: (f64, f64),
+) {
     if w == 0.0 {
         return;
     }
@@ -21,7 +27,7 @@ pub fn add_continuous(asm: &mut Assembler, a: &Layer, b: Option<&Layer>, w: f64)
         pairs.push((a, b, -w));
     }
     for (p, q, s) in pairs {
-        for blk in gram_blocks(p, q, Derivative::Value) {
+        for blk in gram_blocks_over(p, q, Derivative::Value, range) {
             let nc = blk.cols.len();
             for (r, &i) in blk.rows.iter().enumerate() {
                 for (c, &j) in blk.cols.iter().enumerate() {

@@ -403,9 +403,20 @@ impl FeSea {
             return out;
         };
         let th = xs.map(|x| PI * x / self.length);
+        // Off the rail (a wheel before x = 0 or beyond L) nothing acts: the sines are zeroed.
+        let on = xs.map(|x| {
+            if (0.0..=self.length).contains(&x) {
+                1.0
+            } else {
+                0.0
+            }
+        });
         let two_c = th.map(|t| 2.0 * t.cos());
         let mut prev = th.map(|t| ((first - 1) as f64 * t).sin());
-        let mut cur = th.map(|t| (first as f64 * t).sin());
+        let mut cur: [f64; K] = std::array::from_fn(|k| on[k] * (first as f64 * th[k]).sin());
+        for k in 0..K {
+            prev[k] *= on[k];
+        }
         let mut n = first;
         for (j, v) in terms {
             while n < *j {
@@ -425,10 +436,15 @@ impl FeSea {
     }
 
     /// s_j(x) of every local mode, in `modes` order (consecutive sine indices).
+    /// Zero off the rail.
     pub fn local_sines_into(&self, x: f64, out: &mut [f64]) {
         let Some(first) = self.modes.first().map(|m| m.index) else {
             return;
         };
+        if !(0.0..=self.length).contains(&x) {
+            out.iter_mut().take(self.modes.len()).for_each(|o| *o = 0.0);
+            return;
+        }
         let th = PI * x / self.length;
         let two_c = 2.0 * th.cos();
         let (mut prev, mut cur) = (((first - 1) as f64 * th).sin(), (first as f64 * th).sin());
@@ -464,6 +480,7 @@ mod tests {
         let rail = Layer::new(
             lc,
             cfg.structure.length,
+            (0.0, cfg.structure.length),
             cfg.discretisation.method,
             0,
             &[],

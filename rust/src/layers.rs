@@ -33,12 +33,14 @@ pub struct Shear {
 }
 
 impl Layer {
-    /// A layer of a validated config. Finite-element layers with an `element_length` get nodes
-    /// on `breakpoints` (the layer's coupling points); the others a uniform mesh of
-    /// `fem_elements`.
+    /// A layer of a validated config over `extent` = (start, end) of a structure of length
+    /// `length`. Finite-element layers with an `element_length` get nodes on `breakpoints`
+    /// (the layer's coupling points); the others a uniform mesh of `fem_elements` over the
+    /// structure's length (in proportion, over part of it).
     pub fn new(
         cfg: &LayerConfig,
         length: f64,
+        (start, end): (f64, f64),
         method: Method,
         fem_elements: usize,
         breakpoints: &[f64],
@@ -55,10 +57,18 @@ impl Layer {
         };
         let basis = match method {
             Method::Fem => {
+                let share = (end - start) / length;
+                let n = ((fem_elements as f64 * share).round() as usize).max(1);
                 let mesh = match cfg.element_length {
-                    Some(h) => FemBasis::aligned(length, h, breakpoints),
-                    None => FemBasis::uniform(length, fem_elements),
-                };
+                    Some(h) => FemBasis::aligned(start, end, h, breakpoints),
+                    // A uniform mesh with nodes on the joints: aligned at its element length.
+                    None if !cfg.joints.is_empty() => {
+                        let points = [breakpoints, &cfg.joints].concat();
+                        FemBasis::aligned(start, end, (end - start) / n as f64, &points)
+                    }
+                    None => FemBasis::uniform(start, end, n),
+                }
+                .with_joints(&cfg.joints);
                 LayerBasis::Fem(match shear {
                     Some(s) => mesh.with_shear(ei, s.kga),
                     None => mesh,
@@ -89,7 +99,7 @@ impl Layer {
         let LayerBasis::Fem(mesh) = &self.basis else {
             return Vec::new();
         };
-        (0..mesh.n_elements())
+        mesh.elements()
             .map(|e| {
                 let (a, b) = (mesh.nodes[e], mesh.nodes[e + 1]);
                 let (w, psi) = mesh.element_funcs(e);
@@ -124,6 +134,14 @@ impl Layer {
 
     pub fn n_dofs(&self) -> usize {
         self.basis.n_dofs()
+    }
+
+    /// [start, end] the layer covers (m).
+    pub fn extent(&self) -> (f64, f64) {
+        match &self.basis {
+            LayerBasis::Fem(mesh) => (mesh.start(), mesh.end()),
+            LayerBasis::Modal(b) => (0.0, b.length),
+        }
     }
 
     /// Shape vector at x in the structure's numbering.
@@ -179,6 +197,12 @@ fn piece_funcs(p: &Piece, d: Derivative) -> Vec<(usize, Func)> {
 /// ∫ N_a·N_bᵀ (or of curvatures): one analytic block for two modal layers, else one block per
 /// overlap of the pieces of two FEM layers.
 pub fn gram_blocks(a: &Layer, b: &Layer, d: Derivative) -> Vec<Block> {
+    gram_blocks_over(a, b, d, (f64::NEG_INFINITY, f64::INFINITY))
+}
+
+/// `gram_blocks` with the integrals over `range` only (finite-element layers; two modal
+/// layers span the whole structure and take the analytic block).
+pub fn gram_blocks_over(a: &Layer, b: &Layer, d: Derivative, range: (f64, f64)) -> Vec<Block> {
     if let (LayerBasis::Modal(ma), LayerBasis::Modal(mb)) = (&a.basis, &b.basis) {
         return vec![Block {
             rows: (0..ma.n_dofs()).map(|k| a.offset + k).collect(),
@@ -191,7 +215,8 @@ pub fn gram_blocks(a: &Layer, b: &Layer, d: Derivative) -> Vec<Block> {
     let mut out = Vec::new();
     let (mut i, mut j) = (0, 0);
     while i < pa.len() && j < pb.len() {
-        let (lo, hi) = (pa[i].a.max(pb[j].a), pa[i].b.min(pb[j].b));
+        let lo = pa[i].a.max(pb[j].a).max(range.0);
+        let hi = pa[i].b.min(pb[j].b).min(range.1);
         if hi > lo {
             let fa = piece_funcs(&pa[i], d);
             let fb = if same && i == j {
@@ -239,10 +264,13 @@ mod tests {
             shear_modulus: None,
             shear_coefficient: None,
             element_length: None,
+            joints: Vec::new(),
             damping: RayleighConfig::Coefficients {
                 alpha: 0.0,
                 beta: 0.0,
             },
+            start: None,
+            end: None,
         }
     }
 
@@ -251,7 +279,7 @@ mod tests {
             modes,
             ..rail_config()
         };
-        Layer::new(&cfg, 32.0, method, 40, &[], 0)
+        Layer::new(&cfg, 32.0, (0.0, 32.0), method, 40, &[], 0)
     }
 
     /// A Timoshenko rail of shear stiffness κG = `kg` (κ = 0.4) meshed at 0.08 m with nodes at
@@ -263,7 +291,7 @@ mod tests {
             element_length: Some(0.08),
             ..rail_config()
         };
-        Layer::new(&cfg, 32.0, Method::Fem, 0, &[0.1, 0.74], 0)
+        Layer::new(&cfg, 32.0, (0.0, 32.0), Method::Fem, 0, &[0.1, 0.74], 0)
     }
 
     /// The interdependent-interpolation element's stiffness equals the closed form of the

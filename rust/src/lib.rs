@@ -34,6 +34,7 @@ pub mod simulate;
 pub mod sparse;
 pub mod structure;
 pub mod synthesis;
+pub mod trains;
 pub mod vehicle;
 
 pub use config::{Config, Profile};

@@ -80,7 +80,10 @@ pub fn table1_structure() -> StructureConfig {
         shear_modulus: None,
         shear_coefficient: None,
         element_length: None,
+        joints: Vec::new(),
         damping,
+        start: None,
+        end: None,
     };
     let fasteners: Vec<f64> = (0..=250).map(|i| 0.64 * i as f64).collect();
     let piers: Vec<f64> = (0..=5).map(|i| 32.0 * i as f64).collect();
@@ -104,6 +107,8 @@ pub fn table1_structure() -> StructureConfig {
                 stiffness: 6e7,
                 damping: 4.77e4,
                 positions: fasteners,
+                start: None,
+                end: None,
             },
             CouplingConfig {
                 upper: "slab".into(),
@@ -112,6 +117,8 @@ pub fn table1_structure() -> StructureConfig {
                 stiffness: 9e8,
                 damping: 8.3e4,
                 positions: vec![],
+                start: None,
+                end: None,
             },
             CouplingConfig {
                 upper: "base".into(),
@@ -120,6 +127,8 @@ pub fn table1_structure() -> StructureConfig {
                 stiffness: 1e8,
                 damping: 2.48e5,
                 positions: vec![],
+                start: None,
+                end: None,
             },
             CouplingConfig {
                 upper: "bridge".into(),
@@ -128,6 +137,8 @@ pub fn table1_structure() -> StructureConfig {
                 stiffness: 1e15,
                 damping: 0.0,
                 positions: piers,
+                start: None,
+                end: None,
             },
         ],
     }

@@ -141,7 +141,7 @@ fn fem_wavenumber_limit(cfg: &LayerConfig, h: f64) -> f64 {
 fn element_layer(cfg: &LayerConfig, h: f64) -> Layer {
     let mut one = cfg.clone();
     one.element_length = None;
-    Layer::new(&one, h, Method::Fem, 1, &[], 0)
+    Layer::new(&one, h, (0.0, h), Method::Fem, 1, &[], 0)
 }
 
 /// The first pinned–pinned frequency (Hz) of the top layer (the rail) between its discrete

@@ -26,6 +26,9 @@ pub struct Structure {
     /// `m`, `k`, `c` without the dampers, on the layers' DOFs: the time stepper factors these
     /// and takes the dampers as rank-one updates (`None`: no dampers, use `m`, `k`, `c`).
     pub base: Option<[CsrMatrix; 3]>,
+    /// `solver.edge_ramp` (m): over how much of each end of the rail a wheel's force is
+    /// handed to the rigid track beyond (`edge_share`).
+    pub edge_ramp: f64,
 }
 
 impl Structure {
@@ -103,6 +106,7 @@ impl Structure {
             fesea,
             tids: Vec::new(),
             base: None,
+            edge_ramp: cfg.solver.edge_ramp,
         };
         let [m, k, c] = [am, ak, ac].map(Assembler::finish);
         if let Some(t) = &cfg.tids {
@@ -224,7 +228,38 @@ impl Structure {
     /// Shape vector of a wheel's contact on the rail (layer 0) at x: the point shape for a
     /// point contact (`patch` = 0), else the load-weighted average over its Hertz patch of
     /// half-length `patch` (m; finite-element rails, which the configuration ensures).
+    ///
+    /// Off the rail the wheel runs on a rigid track; within `edge_ramp` of the rail's ends the
+    /// shape is scaled by the share s(x) of the wheel's force the rail carries (`edge_share`),
+    /// the rigid track beyond taking the rest, so that a wheel joins and leaves the structure
+    /// without a step in the rail level under it (docs/zones.md).
     pub fn wheel_shape_into(&self, x: f64, patch: f64, out: &mut Shape) {
+        self.wheel_shape_on_rail(x, patch, out);
+        let s = self.edge_share(x);
+        if s != 1.0 {
+            out.values.iter_mut().for_each(|v| *v *= s);
+        }
+    }
+
+    /// The share (0–1) of a wheel's force at x that the rail carries: 0 off the rail, rising
+    /// as a raised cosine over the first `edge_ramp` metres of the rail and falling over the
+    /// last, 1 in between (and everywhere when `edge_ramp` is 0).
+    pub fn edge_share(&self, x: f64) -> f64 {
+        let (a, b) = self.layers[0].extent();
+        if x < a || x > b {
+            return 0.0;
+        }
+        let ramp = |d: f64| {
+            if d >= self.edge_ramp {
+                1.0
+            } else {
+                0.5 * (1.0 - (std::f64::consts::PI * d / self.edge_ramp).cos())
+            }
+        };
+        ramp(x - a) * ramp(b - x)
+    }
+
+    fn wheel_shape_on_rail(&self, x: f64, patch: f64, out: &mut Shape) {
         match &self.layers[0].basis {
             LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_into(x, patch, out),
             _ => {
@@ -234,13 +269,17 @@ impl Structure {
         }
     }
 
-    /// `local_flexibility` of the rail under a wheel, averaged over its patch (m/N).
+    /// `local_flexibility` of the rail under a wheel, averaged over its patch (m/N), times
+    /// the square of the rail's share of the force (`edge_share`): the wheel carries s·P to
+    /// the rail and sees s times its deflection.
     pub fn wheel_flexibility(&self, x: f64, patch: f64) -> f64 {
         let l = &self.layers[0];
-        match &l.basis {
-            LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
-            _ => self.local_flexibility(0, x),
-        }
+        let s = self.edge_share(x);
+        s * s
+            * match &l.basis {
+                LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
+                _ => self.local_flexibility(0, x),
+            }
     }
 
     /// Entries a wheel's shape vector may need (`wheel_shape_into`).
@@ -321,9 +360,10 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
             let layer = Layer::new(
                 &lc,
                 s.length,
+                cfg.extent(i),
                 cfg.discretisation.method,
                 cfg.discretisation.fem_elements,
-                &coupling_points(cfg, &lc.name),
+                &[coupling_points(cfg, &lc.name), lc.joints.clone()].concat(),
                 offset,
             );
             offset += layer.n_dofs();
@@ -332,16 +372,22 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
         .collect()
 }
 
-/// The points where discrete couplings attach to the layer `name`: the nodes of an aligned
-/// finite-element mesh. Dampers are left out: the mesh, and so a synthesis reduction built on
-/// it, is the same with and without them (a damper between nodes acts through the element's
-/// shape functions; the presets put theirs on nodes).
+/// The points where couplings attach to the layer `name` or begin and end on it: the nodes
+/// of an aligned finite-element mesh. Dampers are left out: the mesh, and so a synthesis
+/// reduction built on it, is the same with and without them (a damper between nodes acts
+/// through the element's shape functions; the presets put theirs on nodes).
 fn coupling_points(cfg: &Config, name: &str) -> Vec<f64> {
     cfg.structure
         .couplings
         .iter()
-        .filter(|c| c.kind == CouplingKind::Discrete && (c.upper == name || c.lower == name))
-        .flat_map(|c| c.positions.iter().copied())
+        .filter(|c| c.upper == name || c.lower == name)
+        .flat_map(|c| match c.kind {
+            CouplingKind::Discrete => c.positions.clone(),
+            CouplingKind::Continuous => {
+                let (a, b) = cfg.coupling_range(c);
+                vec![a, b]
+            }
+        })
         .collect()
 }
 
@@ -385,7 +431,7 @@ fn assemble(cfg: &Config, layers: &[Layer]) -> [Assembler; 3] {
         };
         for (asm, w) in [(&mut ak, c.stiffness), (&mut ac, c.damping)] {
             match c.kind {
-                CouplingKind::Continuous => add_continuous(asm, a, b, w),
+                CouplingKind::Continuous => add_continuous(asm, a, b, w, cfg.coupling_range(c)),
                 CouplingKind::Discrete => add_discrete(asm, a, b, &c.positions, w),
             }
         }
@@ -467,5 +513,48 @@ fn add_on_cubics(asm: &mut Assembler, fs: &FeSea, d: impl Fn(usize, usize) -> f6
         for (q, &j) in fs.dofs.iter().enumerate() {
             asm.add(i, j, d(p, q));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rail's share of a wheel's force is 0 off the rail and at its ends, a raised cosine
+    /// over `edge_ramp` (one half at half the ramp), 1 in between; the wheel's shape vector is
+    /// the point shape times the share, zero off the rail.
+    #[test]
+    fn wheels_hand_their_force_over_at_the_rail_ends() {
+        let mut cfg = crate::presets::paper();
+        cfg.discretisation.method = Method::Modal;
+        cfg.solver.edge_ramp = 8.0;
+        let st = Structure::build(&cfg).unwrap();
+        let l = st.length;
+        for (x, want) in [
+            (-1.0, 0.0),
+            (0.0, 0.0),
+            (4.0, 0.5),
+            (8.0, 1.0),
+            (80.0, 1.0),
+            (l - 4.0, 0.5),
+            (l, 0.0),
+            (l + 3.0, 0.0),
+        ] {
+            assert!(
+                (st.edge_share(x) - want).abs() < 1e-12,
+                "x = {x}: {}",
+                st.edge_share(x)
+            );
+        }
+        let mut got = Shape::default();
+        st.wheel_shape_into(4.0, 0.0, &mut got);
+        let point = st.shape(0, 4.0);
+        assert_eq!(got.start, point.start);
+        for (g, p) in got.values.iter().zip(&point.values) {
+            assert!((g - 0.5 * p).abs() <= 1e-15 * p.abs().max(1.0));
+        }
+        st.wheel_shape_into(-2.0, 0.0, &mut got);
+        assert!(got.values.iter().all(|&v| v == 0.0));
+        assert_eq!(st.wheel_flexibility(-2.0, 0.0), 0.0);
     }
 }

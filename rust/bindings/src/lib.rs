@@ -165,6 +165,25 @@ fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
+/// The stretch (m) the wheels of a run roll over (`Config::wheel_travel`); `None` when the
+/// configuration does not parse or has no vehicles.
+#[pyfunction]
+fn wheel_travel(config_json: &str) -> Option<(f64, f64)> {
+    let cfg = vtb::Config::from_json(config_json).ok()?;
+    if !(cfg.solver.dt > 0.0 && cfg.t_end().is_finite())
+        || cfg.t_end() / cfg.solver.dt > vtb::config::MAX_STEPS as f64
+    {
+        return None;
+    }
+    cfg.wheel_travel()
+}
+
+/// The train library (`vtb::trains::library`) as JSON.
+#[pyfunction]
+fn train_library() -> String {
+    serde_json::to_string(&vtb::trains::library()).expect("the library serialises")
+}
+
 /// The JSON configuration of a named preset (`"paper"`).
 #[pyfunction]
 fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
@@ -263,13 +282,17 @@ fn shapes<'py>(
     let mut starts = Vec::with_capacity(xs.len());
     let mut values = Vec::with_capacity(xs.len() * width);
     for (i, &x) in xs.iter().enumerate() {
-        if !(x.is_finite() && (0.0..=st.length).contains(&x)) {
+        let (a, b) = st.layers[layer].extent();
+        if !(x.is_finite() && (a..=b).contains(&x)) {
             return Err(to_py_err(
                 py,
                 VtbError::config(
                     &format!("x[{i}]"),
                     x,
-                    "must lie on the structure, 0 ≤ x ≤ L",
+                    format!(
+                        "must lie on layer {:?}, {a} ≤ x ≤ {b}",
+                        st.layers[layer].name
+                    ),
                 ),
             ));
         }
@@ -664,6 +687,8 @@ fn plausible_ranges() -> Vec<(&'static str, f64, f64, &'static str, &'static str
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
+    m.add_function(wrap_pyfunction!(train_library, m)?)?;
+    m.add_function(wrap_pyfunction!(wheel_travel, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(matrices, m)?)?;
