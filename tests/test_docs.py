@@ -31,7 +31,7 @@ def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
     assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "defect_impacts.py", "receptance_check.py", "speed_study.py",
-                       "viaduct_passage.py"]
+                       "train_passage.py", "viaduct_passage.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
 
@@ -97,6 +97,19 @@ def test_viaduct_passage_example():
     gain = float(re.search(r"\(([+-][\d.]+) dB\)", text).group(1))
     assert gain < -3.0
     assert "EN 1990 band 30 Hz" in text and text.count("comfort a_w car 0") == 2
+
+
+def test_train_passage_example():
+    """Two cars start before the track and end beyond the bridge; the record runs on after the
+    last axle has left the bridge, where the deck only rings; every wheel keeps its contact."""
+    text = _run("train_passage.py")
+    run, left = map(float, re.search(r"run ([\d.]+) s, last axle off the bridge at ([\d.]+) s", text).groups())
+    assert run > left + 0.2
+    assert text.count("car 0") == 1 and "car 1" in text
+    low, high = map(float, re.search(r"wheel forces ([\d.]+)–([\d.]+) kN", text).groups())
+    assert 0.4 * 76.0 < low < 76.0 < high < 2.0 * 76.0
+    peak, tail = map(float, re.search(r"peak ([\d.]+) mm during the passage, ([\d.]+) mm in the free", text).groups())
+    assert tail < 0.3 * peak
 
 
 def test_no_page_or_generated_report_carries_an_absolute_path():
