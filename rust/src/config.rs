@@ -832,9 +832,27 @@ impl Config {
         }
     }
 
-    /// Checks every field; the first problem found is returned with its dotted path.
+    /// Checks every field; the first problem found is returned with its dotted path. Each
+    /// sub-configuration checks its own fields (`validate(&self, path)`); the phases here add
+    /// what relates one part to another: names, positions on layers, the method, the run.
     pub fn validate(&self, profile: &Profile) -> Result<()> {
         crate::plausibility::check(self)?;
+        let length = self.validate_structure()?;
+        self.validate_discretisation()?;
+        let (dt, travel) = self.validate_run()?;
+        self.validate_loads(travel, profile)?;
+        self.validate_output(dt)?;
+        self.validate_profile(profile)?;
+        self.validate_treads(profile)?;
+        if let Some(t) = &self.tids {
+            self.validate_tids(t, length)?;
+        }
+        crate::budget::check_model(self)
+    }
+
+    /// Layers (names, meshes, extents, bases) and couplings (layers, positions, ranges);
+    /// returns the structure's length.
+    fn validate_structure(&self) -> Result<f64> {
         let s = &self.structure;
         let length = positive("structure.length", s.length)?;
         if s.layers.is_empty() {
@@ -846,13 +864,7 @@ impl Config {
         }
         for (i, l) in s.layers.iter().enumerate() {
             let p = format!("structure.layers[{i}]");
-            if l.name.is_empty() || l.name == GROUND {
-                return Err(VtbError::config(
-                    format!("{p}.name"),
-                    format!("{:?}", l.name),
-                    "must be a non-empty name other than \"ground\"",
-                ));
-            }
+            l.validate(&p)?;
             if s.layers[..i].iter().any(|o| o.name == l.name) {
                 return Err(VtbError::config(
                     format!("{p}.name"),
@@ -860,10 +872,6 @@ impl Config {
                     "layer names must be unique",
                 ));
             }
-            positive(&format!("{p}.density"), l.density)?;
-            positive(&format!("{p}.area"), l.area)?;
-            positive(&format!("{p}.youngs_modulus"), l.youngs_modulus)?;
-            positive(&format!("{p}.inertia"), l.inertia)?;
             self.validate_layer_mesh(l, &p, length)?;
             self.validate_extent(l, &p, length)?;
             if self.discretisation.method != Method::Fem {
@@ -880,31 +888,6 @@ impl Config {
                         l.modes + l.local_modes,
                         format!("modes + local_modes must be <= {MAX_MODES}"),
                     ));
-                }
-            }
-            match l.damping {
-                RayleighConfig::Ratio { ratio, f1, f2 } => {
-                    let r = non_negative(&format!("{p}.damping.ratio"), ratio)?;
-                    if r >= 1.0 {
-                        return Err(VtbError::config(
-                            format!("{p}.damping.ratio"),
-                            r,
-                            "must be < 1",
-                        ));
-                    }
-                    positive(&format!("{p}.damping.f1"), f1)?;
-                    positive(&format!("{p}.damping.f2"), f2)?;
-                    if f2 <= f1 {
-                        return Err(VtbError::config(
-                            format!("{p}.damping.f2"),
-                            f2,
-                            format!("must be > f1 = {f1}"),
-                        ));
-                    }
-                }
-                RayleighConfig::Coefficients { alpha, beta } => {
-                    non_negative(&format!("{p}.damping.alpha"), alpha)?;
-                    non_negative(&format!("{p}.damping.beta"), beta)?;
                 }
             }
         }
@@ -933,17 +916,9 @@ impl Config {
                     ));
                 }
             }
-            non_negative(&format!("{p}.stiffness"), c.stiffness)?;
-            non_negative(&format!("{p}.damping"), c.damping)?;
+            c.validate(&p)?;
             match c.kind {
                 CouplingKind::Discrete => {
-                    if c.positions.is_empty() {
-                        return Err(VtbError::config(
-                            format!("{p}.positions"),
-                            "[]",
-                            "a discrete coupling needs at least one position",
-                        ));
-                    }
                     for (j, &x) in c.positions.iter().enumerate() {
                         let field = format!("{p}.positions[{j}]");
                         self.on_layer(&field, x, upper)?;
@@ -951,28 +926,16 @@ impl Config {
                             self.on_layer(&field, x, lower)?;
                         }
                     }
-                    for (name, v) in [("start", c.start), ("end", c.end)] {
-                        if let Some(v) = v {
-                            return Err(VtbError::config(
-                                format!("{p}.{name}"),
-                                v,
-                                "a discrete coupling acts at its positions; start and end are for continuous ones",
-                            ));
-                        }
-                    }
                 }
-                CouplingKind::Continuous => {
-                    if !c.positions.is_empty() {
-                        return Err(VtbError::config(
-                            format!("{p}.positions"),
-                            format!("{:?}", c.positions),
-                            "a continuous coupling takes no positions",
-                        ));
-                    }
-                    self.validate_coupling_range(c, &p, upper)?;
-                }
+                CouplingKind::Continuous => self.validate_coupling_range(c, &p, upper)?,
             }
         }
+        Ok(length)
+    }
+
+    /// The discretisation against the structure.
+    fn validate_discretisation(&self) -> Result<()> {
+        let s = &self.structure;
         let d = &self.discretisation;
         if let Some(fc) = d.synthesis_cutoff {
             let fc = positive("discretisation.synthesis_cutoff", fc)?;
@@ -1005,14 +968,16 @@ impl Config {
                 "the hybrid method needs local modes on the top layer",
             ));
         }
+        Ok(())
+    }
 
+    /// Speed, solver and the run's end; returns the time step and the distance travelled.
+    fn validate_run(&self) -> Result<(f64, f64)> {
         let speed = non_negative("speed", self.speed)?;
         let sv = &self.solver;
-        let dt = positive("solver.dt", sv.dt)?;
-        non_negative("solver.end_margin", sv.end_margin)?;
-        if non_negative("solver.edge_ramp", sv.edge_ramp)? > 0.0
-            && self.discretisation.method == Method::Hybrid
-        {
+        sv.validate()?;
+        let dt = sv.dt;
+        if sv.edge_ramp > 0.0 && self.discretisation.method == Method::Hybrid {
             return Err(VtbError::config(
                 "solver.edge_ramp",
                 sv.edge_ramp,
@@ -1020,47 +985,12 @@ impl Config {
                  discretisation.method = \"fem\" or \"modal\"",
             ));
         }
-        non_negative("solver.gravity", sv.gravity)?;
-        positive("solver.contact_tol", sv.contact_tol)?;
-        if sv.contact_max_iter == 0 {
-            return Err(VtbError::config(
-                "solver.contact_max_iter",
-                0,
-                "must be >= 1",
-            ));
-        }
-        positive("solver.memory_budget", sv.memory_budget)?;
-        non_negative("solver.fade_in", sv.fade_in)?;
-        if let Some(t) = sv.t_end {
-            positive("solver.t_end", t)?;
-            let steps = t / dt;
-            if (steps - steps.round()).abs() > STEP_TOL && steps < MAX_STEPS as f64 {
-                let (lo, hi) = (steps.floor().max(1.0) * dt, steps.ceil() * dt);
-                return Err(VtbError::config(
-                    "solver.t_end",
-                    format!("{t:?}"),
-                    format!(
-                        "is not a whole number of time steps dt = {dt:?} (t_end/dt = {steps:.6}): \
-                         the nearest valid end times are {lo:?} and {hi:?} s"
-                    ),
-                ));
-            }
-        } else if speed == 0.0 {
+        if sv.t_end.is_none() && speed == 0.0 {
             return Err(VtbError::config(
                 "solver.t_end",
                 "None",
                 "an end time is required when speed = 0",
             ));
-        }
-        if let Some(tail) = sv.tail {
-            non_negative("solver.tail", tail)?;
-            if sv.t_end.is_some() {
-                return Err(VtbError::config(
-                    "solver.tail",
-                    tail,
-                    "give either solver.t_end or solver.tail, not both",
-                ));
-            }
         }
         let t_end = self.t_end();
         if !(t_end > 0.0) {
@@ -1079,39 +1009,14 @@ impl Config {
             ));
         }
         let travel = speed * self.n_steps() as f64 * dt;
+        Ok((dt, travel))
+    }
 
+    /// Vehicles and moving forces: their own fields, the method, the profile under them.
+    fn validate_loads(&self, travel: f64, profile: &Profile) -> Result<()> {
         for (i, v) in self.vehicles.iter().enumerate() {
             let p = format!("vehicles[{i}]");
-            for (name, val) in [
-                ("m_c", v.m_c),
-                ("j_c", v.j_c),
-                ("m_t", v.m_t),
-                ("j_t", v.j_t),
-                ("m_w", v.m_w),
-                ("k_s", v.k_s),
-                ("k_p", v.k_p),
-                ("l_c", v.l_c),
-                ("l_t", v.l_t),
-                ("wheel_radius", v.wheel_radius),
-            ] {
-                positive(&format!("{p}.{name}"), val)?;
-            }
-            non_negative(&format!("{p}.c_s"), v.c_s)?;
-            non_negative(&format!("{p}.c_p"), v.c_p)?;
-            if v.l_t >= v.l_c {
-                return Err(VtbError::config(
-                    format!("{p}.l_t"),
-                    v.l_t,
-                    format!("half wheelbase must be smaller than l_c = {}", v.l_c),
-                ));
-            }
-            if v.rails == 0 {
-                return Err(VtbError::config(format!("{p}.rails"), 0, "must be >= 1"));
-            }
-            if let Some(g) = v.contact_constant {
-                positive(&format!("{p}.contact_constant"), g)?;
-            }
-            positive(&format!("{p}.rail_crown_radius"), v.rail_crown_radius)?;
+            v.validate(&p)?;
             if v.contact_patch && self.discretisation.method != Method::Fem {
                 return Err(VtbError::config(
                     format!("{p}.contact_patch"),
@@ -1123,7 +1028,6 @@ impl Config {
                     ),
                 ));
             }
-            finite(&format!("{p}.x_front"), v.x_front)?;
             let offs = v.wheel_offsets();
             // Wheels may start before x = 0 and end beyond L: off the structure they run on a
             // rigid track (docs/model.md §4).
@@ -1142,9 +1046,7 @@ impl Config {
         }
         for (i, f) in self.forces.iter().enumerate() {
             let p = format!("forces[{i}]");
-            finite(&format!("{p}.magnitude"), f.magnitude)?;
-            // Off its layer a force loads nothing.
-            finite(&format!("{p}.x0"), f.x0)?;
+            f.validate(&p)?;
             if let Some(layer) = &f.layer {
                 if self.layer_index(layer).is_none() {
                     return Err(VtbError::config(
@@ -1162,6 +1064,11 @@ impl Config {
                 "nothing loads the structure: give at least one vehicle or moving force",
             ));
         }
+        Ok(())
+    }
+
+    /// Observation points on their layers, the metrics' window, bands and index names.
+    fn validate_output(&self, dt: f64) -> Result<()> {
         for (i, &x) in self.output.points.iter().enumerate() {
             for li in self.index_layers() {
                 self.on_layer(&format!("output.points[{i}]"), x, li)?;
@@ -1200,6 +1107,11 @@ impl Config {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The sampled rail profile.
+    fn validate_profile(&self, profile: &Profile) -> Result<()> {
         if !profile.values.is_empty() {
             positive("irregularity.dx", profile.dx)?;
             finite("irregularity.x0", profile.x0)?;
@@ -1223,11 +1135,7 @@ impl Config {
                 ));
             }
         }
-        self.validate_treads(profile)?;
-        if let Some(t) = &self.tids {
-            self.validate_tids(t, length)?;
-        }
-        crate::budget::check_model(self)
+        Ok(())
     }
 
     /// A layer's start and end: within the structure, in order, finite elements only.
@@ -1485,6 +1393,184 @@ impl Config {
                     self.structure.layers[i].name
                 ),
             ));
+        }
+        Ok(())
+    }
+}
+
+// Each sub-configuration checks its own fields under its path; `Config::validate` adds the
+// checks that relate one part to another (names, positions on layers, the method, the run).
+
+impl RayleighConfig {
+    pub fn validate(&self, p: &str) -> Result<()> {
+        match *self {
+            RayleighConfig::Ratio { ratio, f1, f2 } => {
+                let r = non_negative(&format!("{p}.ratio"), ratio)?;
+                if r >= 1.0 {
+                    return Err(VtbError::config(format!("{p}.ratio"), r, "must be < 1"));
+                }
+                positive(&format!("{p}.f1"), f1)?;
+                positive(&format!("{p}.f2"), f2)?;
+                if f2 <= f1 {
+                    return Err(VtbError::config(
+                        format!("{p}.f2"),
+                        f2,
+                        format!("must be > f1 = {f1}"),
+                    ));
+                }
+            }
+            RayleighConfig::Coefficients { alpha, beta } => {
+                non_negative(&format!("{p}.alpha"), alpha)?;
+                non_negative(&format!("{p}.beta"), beta)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl LayerConfig {
+    pub fn validate(&self, p: &str) -> Result<()> {
+        if self.name.is_empty() || self.name == GROUND {
+            return Err(VtbError::config(
+                format!("{p}.name"),
+                format!("{:?}", self.name),
+                "must be a non-empty name other than \"ground\"",
+            ));
+        }
+        positive(&format!("{p}.density"), self.density)?;
+        positive(&format!("{p}.area"), self.area)?;
+        positive(&format!("{p}.youngs_modulus"), self.youngs_modulus)?;
+        positive(&format!("{p}.inertia"), self.inertia)?;
+        self.damping.validate(&format!("{p}.damping"))
+    }
+}
+
+impl CouplingConfig {
+    pub fn validate(&self, p: &str) -> Result<()> {
+        non_negative(&format!("{p}.stiffness"), self.stiffness)?;
+        non_negative(&format!("{p}.damping"), self.damping)?;
+        match self.kind {
+            CouplingKind::Discrete => {
+                if self.positions.is_empty() {
+                    return Err(VtbError::config(
+                        format!("{p}.positions"),
+                        "[]",
+                        "a discrete coupling needs at least one position",
+                    ));
+                }
+                for (name, v) in [("start", self.start), ("end", self.end)] {
+                    if let Some(v) = v {
+                        return Err(VtbError::config(
+                            format!("{p}.{name}"),
+                            v,
+                            "a discrete coupling acts at its positions; start and end are for continuous ones",
+                        ));
+                    }
+                }
+            }
+            CouplingKind::Continuous => {
+                if !self.positions.is_empty() {
+                    return Err(VtbError::config(
+                        format!("{p}.positions"),
+                        format!("{:?}", self.positions),
+                        "a continuous coupling takes no positions",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl VehicleConfig {
+    pub fn validate(&self, p: &str) -> Result<()> {
+        let v = self;
+        for (name, val) in [
+            ("m_c", v.m_c),
+            ("j_c", v.j_c),
+            ("m_t", v.m_t),
+            ("j_t", v.j_t),
+            ("m_w", v.m_w),
+            ("k_s", v.k_s),
+            ("k_p", v.k_p),
+            ("l_c", v.l_c),
+            ("l_t", v.l_t),
+            ("wheel_radius", v.wheel_radius),
+        ] {
+            positive(&format!("{p}.{name}"), val)?;
+        }
+        non_negative(&format!("{p}.c_s"), v.c_s)?;
+        non_negative(&format!("{p}.c_p"), v.c_p)?;
+        if v.l_t >= v.l_c {
+            return Err(VtbError::config(
+                format!("{p}.l_t"),
+                v.l_t,
+                format!("half wheelbase must be smaller than l_c = {}", v.l_c),
+            ));
+        }
+        if v.rails == 0 {
+            return Err(VtbError::config(format!("{p}.rails"), 0, "must be >= 1"));
+        }
+        if let Some(g) = v.contact_constant {
+            positive(&format!("{p}.contact_constant"), g)?;
+        }
+        positive(&format!("{p}.rail_crown_radius"), v.rail_crown_radius)?;
+        // Wheels may start before x = 0 and end beyond L: off the structure they run on a
+        // rigid track (docs/zones.md).
+        finite(&format!("{p}.x_front"), v.x_front)?;
+        Ok(())
+    }
+}
+
+impl MovingForceConfig {
+    pub fn validate(&self, p: &str) -> Result<()> {
+        finite(&format!("{p}.magnitude"), self.magnitude)?;
+        // Off its layer a force loads nothing.
+        finite(&format!("{p}.x0"), self.x0)?;
+        Ok(())
+    }
+}
+
+impl SolverConfig {
+    pub fn validate(&self) -> Result<()> {
+        let dt = positive("solver.dt", self.dt)?;
+        non_negative("solver.end_margin", self.end_margin)?;
+        non_negative("solver.edge_ramp", self.edge_ramp)?;
+        non_negative("solver.gravity", self.gravity)?;
+        positive("solver.contact_tol", self.contact_tol)?;
+        if self.contact_max_iter == 0 {
+            return Err(VtbError::config(
+                "solver.contact_max_iter",
+                0,
+                "must be >= 1",
+            ));
+        }
+        positive("solver.memory_budget", self.memory_budget)?;
+        non_negative("solver.fade_in", self.fade_in)?;
+        if let Some(t) = self.t_end {
+            positive("solver.t_end", t)?;
+            let steps = t / dt;
+            if (steps - steps.round()).abs() > STEP_TOL && steps < MAX_STEPS as f64 {
+                let (lo, hi) = (steps.floor().max(1.0) * dt, steps.ceil() * dt);
+                return Err(VtbError::config(
+                    "solver.t_end",
+                    format!("{t:?}"),
+                    format!(
+                        "is not a whole number of time steps dt = {dt:?} (t_end/dt = {steps:.6}): \
+                         the nearest valid end times are {lo:?} and {hi:?} s"
+                    ),
+                ));
+            }
+        }
+        if let Some(tail) = self.tail {
+            non_negative("solver.tail", tail)?;
+            if self.t_end.is_some() {
+                return Err(VtbError::config(
+                    "solver.tail",
+                    tail,
+                    "give either solver.t_end or solver.tail, not both",
+                ));
+            }
         }
         Ok(())
     }

@@ -155,6 +155,9 @@ pub(super) fn project(red: &Reduction, s: &Shape, out: &mut CVec) {
 /// displacement under it Re Σ (ψᵀs)·Q̃ into `rail[w]`.
 pub(super) struct WheelPass<'a, const W: usize> {
     pub shapes: &'a [Shape],
+    /// Wheels on the structure; the others (a zero shape) are skipped, their `outs` already
+    /// zero.
+    pub active: &'a [bool],
     pub outs: &'a mut [CVec],
     pub diag: &'a mut [Acc<1>],
     pub rail: &'a mut [Acc<W>],
@@ -168,7 +171,7 @@ pub(super) fn wheel_pass<const W: usize>(
     p: WheelPass<'_, W>,
 ) {
     crate::wide!(<W> (red: &Reduction = red, coef: &Coefficients = coef, qf: &[CVec; W] = q_free, p: WheelPass<'_, W> = p) {
-        let WheelPass { shapes, outs, diag, rail } = p;
+        let WheelPass { shapes, active, outs, diag, rail } = p;
         let n = red.stride;
         diag.fill(Acc::ZERO);
         rail.fill(Acc::ZERO);
@@ -176,7 +179,9 @@ pub(super) fn wheel_pass<const W: usize>(
         while b0 < n {
             let b1 = (b0 + BLOCK).min(n);
             let (a1r, a1i) = (&coef.a1[0][b0..b1], &coef.a1[1][b0..b1]);
-            for (((s, out), d), r) in shapes.iter().zip(outs.iter_mut()).zip(diag.iter_mut()).zip(rail.iter_mut()) {
+            for ((((s, out), d), r), _) in shapes.iter().zip(outs.iter_mut()).zip(diag.iter_mut()).zip(rail.iter_mut())
+                .zip(active).filter(|(_, on)| **on)
+            {
                 let (or, oi) = (&mut out.re[b0..b1], &mut out.im[b0..b1]);
                 project_block(red, s, b0, b1, or, oi);
                 let chunks = or.chunks_exact(P).zip(oi.chunks_exact(P)).zip(a1r.chunks_exact(P).zip(a1i.chunks_exact(P)));
@@ -240,6 +245,8 @@ pub(super) struct Update<'a, const W: usize> {
     /// this step (N; a damper's −F).
     pub ports: &'a [CVec],
     pub forces: &'a [[f64; W]],
+    /// Ports that carry a force (a wheel off the structure has a zero port and is skipped).
+    pub active: &'a [bool],
     /// The moving forces' modal force at t_{n+1} and t_{n+2} (shared), if any.
     pub movers: Option<(&'a CVec, &'a CVec)>,
     /// The observers' ψᵀs and λ²ψᵀs; out, per observer: Re Σ ψᵀs·Q and Re Σ λ²ψᵀs·Q (the
@@ -264,7 +271,7 @@ pub(super) fn update<const W: usize>(
     scratch: &mut Scratch,
 ) {
     crate::wide!(<W> (u: Update<'_, W> = u, qf: &mut [CVec; W] = q_free, sc: &mut Scratch = scratch) {
-        let Update { coef, ports, forces, movers, observers, observed, dampers_from, damper_free } = u;
+        let Update { coef, ports, forces, active, movers, observers, observed, dampers_from, damper_free } = u;
         let n = coef.w.len();
         for acc in observed.iter_mut().chain(damper_free.iter_mut()) {
             *acc = Acc::ZERO;
@@ -280,18 +287,22 @@ pub(super) fn update<const W: usize>(
                 let (dgr, dgi) = (&mut sc.dg.re[..nb], &mut sc.dg.im[..nb]);
                 dgr.fill(0.0);
                 dgi.fill(0.0);
-                // Four ports at a time: one pass over the block's Δg per four.
-                for (v, f) in ports.chunks(4).zip(forces.chunks(4)) {
-                    if let ([v0, v1, v2, v3], [f0, f1, f2, f3]) = (v, f) {
-                        let s = [f0[c], f1[c], f2[c], f3[c]];
-                        axpy4(dgr, [&v0.re[b0..b1], &v1.re[b0..b1], &v2.re[b0..b1], &v3.re[b0..b1]], s);
-                        axpy4(dgi, [&v0.im[b0..b1], &v1.im[b0..b1], &v2.im[b0..b1], &v3.im[b0..b1]], s);
-                    } else {
-                        for (v, f) in v.iter().zip(f) {
-                            axpy(dgr, &v.re[b0..b1], f[c]);
-                            axpy(dgi, &v.im[b0..b1], f[c]);
-                        }
+                // Four active ports at a time: one pass over the block's Δg per four.
+                let mut four: [(&[f64], &[f64], f64); 4] = [(&[], &[], 0.0); 4];
+                let mut k = 0;
+                for ((v, f), _) in ports.iter().zip(forces).zip(active).filter(|(_, on)| **on) {
+                    four[k] = (&v.re[b0..b1], &v.im[b0..b1], f[c]);
+                    k += 1;
+                    if k == 4 {
+                        let s = four.map(|(_, _, f)| f);
+                        axpy4(dgr, four.map(|(re, _, _)| re), s);
+                        axpy4(dgi, four.map(|(_, im, _)| im), s);
+                        k = 0;
                     }
+                }
+                for &(re, im, f) in &four[..k] {
+                    axpy(dgr, re, f);
+                    axpy(dgi, im, f);
                 }
                 let (qfr, qfi) = (&mut qf[c].re[b0..b1], &mut qf[c].im[b0..b1]);
                 let (qr, qi) = (&mut sc.q.re[..nb], &mut sc.q.im[..nb]);

@@ -195,6 +195,9 @@ struct Run<'a, const W: usize> {
     wheel_shapes: Vec<Shape>,
     /// Ports: the wheels' ψᵀs (refreshed every step), then the dampers' ψᵀ(s_up − s_low).
     ports: Vec<CVec>,
+    /// Ports that carry a force: every damper, and the wheels on the structure (a wheel off it
+    /// has a zero shape and a zero port, which the passes skip).
+    active: Vec<bool>,
     /// Contact forces `[lane·nw + wheel]` (N).
     p: Vec<f64>,
     // Dampers.
@@ -468,6 +471,7 @@ impl<'a, const W: usize> Run<'a, W> {
             patch,
             wheel_x0,
             wheel_shapes,
+            active: vec![true; ports.len()],
             ports,
             p,
             shapes_now: mover_shapes(),
@@ -557,6 +561,11 @@ impl<'a, const W: usize> Run<'a, W> {
         let (st, v) = (&self.model.structure, self.model.cfg.speed);
         for (w, s) in self.wheel_shapes.iter_mut().enumerate() {
             st.wheel_shape_into(self.wheel_x0[w] + v * t, self.patch[w], s);
+            let on = s.values.iter().any(|&x| x != 0.0);
+            if self.active[w] && !on {
+                self.ports[w].clear();
+            }
+            self.active[w] = on;
         }
         let nw = self.nw();
         for (o, obs) in self.observers.iter().enumerate() {
@@ -697,6 +706,7 @@ impl<'a, const W: usize> Run<'a, W> {
             &self.q_free,
             WheelPass {
                 shapes: &self.wheel_shapes,
+                active: &self.active,
                 outs: &mut self.ports[..nw],
                 diag: &mut self.diag_acc,
                 rail: &mut self.rail_acc,
@@ -878,6 +888,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 coef: &self.coef,
                 ports: &self.ports,
                 forces: &self.forces,
+                active: &self.active,
                 movers: (!self.movers.is_empty()).then_some((&self.gk_now, &self.gk_ahead)),
                 observers: &self.observer_psi,
                 observed: &mut self.observed,
