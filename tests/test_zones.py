@@ -166,6 +166,8 @@ def test_track_zones_move_everything_by_the_approach():
         vtb.track_zones(vtb.paper_config())
     with pytest.raises(ConfigError, match="approach"):
         vtb.track_zones(base, approach=-1.0)
+    with pytest.raises(ConfigError, match="re-span it before"):
+        vtb.spans(z, [32.0])
 
 
 def test_a_joint_cuts_a_layer_into_independent_simply_supported_spans():

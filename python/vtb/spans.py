@@ -69,6 +69,9 @@ def spans(config: Config, lengths: Sequence[float], pier_stiffness: Union[float,
     st = out.structure
     if len(st.layers) < 2:
         raise config_error("structure.layers", [l.name for l in st.layers], "spans need a bridge below the track (at least two layers)")
+    if st.layers[-1].start is not None or st.layers[-1].end is not None:
+        raise config_error("structure.layers[-1].start", st.layers[-1].start,
+                           "the bridge already covers part of the structure: re-span it before adding track zones")
     bridge = st.layers[-1].name
     old, new = float(st.length), float(ends[-1])
     couplings = []
