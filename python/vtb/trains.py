@@ -40,7 +40,7 @@ def trains() -> dict:
     """The train library: name → :class:`TrainInfo`."""
     out = {}
     for name, t in _LIBRARY.items():
-        lengths = tuple(c["front_overhang"] + 2 * (c["vehicle"]["l_c"] + c["vehicle"]["l_t"]) + c["rear_overhang"] for c in t["cars"])
+        lengths = tuple(c["front_overhang"] + Vehicle(**c["vehicle"]).length + c["rear_overhang"] for c in t["cars"])
         out[name] = TrainInfo(name, t["title"], t["source"], tuple(c["role"] for c in t["cars"]), lengths)
     return out
 

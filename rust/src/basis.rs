@@ -577,15 +577,21 @@ impl FemBasis {
         x >= self.start() && x <= self.end()
     }
 
-    /// Cuts the mesh at each of `joints` (which must be nodes): the node is doubled, with a
-    /// zero-length element between the two, so nothing passes from one side to the other. A
-    /// point at a joint belongs to the element on its right.
+    /// Cuts the mesh at each of `joints` (each a node, up to the breakpoints' merging
+    /// tolerance): the node nearest to it is doubled, with a zero-length element between the
+    /// two, so nothing passes from one side to the other. A point at a joint belongs to the
+    /// element on its right.
     pub fn with_joints(mut self, joints: &[f64]) -> Self {
         for &x in joints {
-            if let Some(i) = self.nodes.iter().position(|&n| n == x) {
-                self.nodes.insert(i, x);
-                self.phi.insert(i, 0.0);
-            }
+            let i = (0..self.nodes.len())
+                .min_by(|&a, &b| {
+                    (self.nodes[a] - x)
+                        .abs()
+                        .total_cmp(&(self.nodes[b] - x).abs())
+                })
+                .expect("a mesh has nodes");
+            self.nodes.insert(i, self.nodes[i]);
+            self.phi.insert(i, 0.0);
         }
         self
     }
@@ -674,7 +680,7 @@ impl FemBasis {
         k22 / (k11 * k22 - k12 * k12)
     }
 
-    /// Pieces of the patch [x − a, x + a] cut at the nodes (and at 0 and `length`), each with
+    /// Pieces of the patch [x − a, x + a] cut at the nodes (and at the mesh's ends), each with
     /// its element, for integrals over a distributed contact.
     fn patch_pieces(&self, x: f64, a: f64) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
         let (lo, hi) = ((x - a).max(self.start()), (x + a).min(self.end()));

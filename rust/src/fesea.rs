@@ -403,20 +403,9 @@ impl FeSea {
             return out;
         };
         let th = xs.map(|x| PI * x / self.length);
-        // Off the rail (a wheel before x = 0 or beyond L) nothing acts: the sines are zeroed.
-        let on = xs.map(|x| {
-            if (0.0..=self.length).contains(&x) {
-                1.0
-            } else {
-                0.0
-            }
-        });
         let two_c = th.map(|t| 2.0 * t.cos());
         let mut prev = th.map(|t| ((first - 1) as f64 * t).sin());
-        let mut cur: [f64; K] = std::array::from_fn(|k| on[k] * (first as f64 * th[k]).sin());
-        for k in 0..K {
-            prev[k] *= on[k];
-        }
+        let mut cur = th.map(|t| (first as f64 * t).sin());
         let mut n = first;
         for (j, v) in terms {
             while n < *j {
@@ -430,6 +419,12 @@ impl FeSea {
                 for g in 0..4 {
                     out[k][g] += v[g] * s;
                 }
+            }
+        }
+        // Off the rail (a wheel before x = 0 or beyond L) nothing acts.
+        for (o, x) in out.iter_mut().zip(xs) {
+            if !(0.0..=self.length).contains(&x) {
+                *o = [0.0; 4];
             }
         }
         out

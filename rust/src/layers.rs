@@ -35,7 +35,7 @@ pub struct Shear {
 impl Layer {
     /// A layer of a validated config over `extent` = (start, end) of a structure of length
     /// `length`. Finite-element layers with an `element_length` get nodes on `breakpoints`
-    /// (the layer's coupling points); the others a uniform mesh of `fem_elements` over the
+    /// (the layer's coupling points) and on its joints; the others a uniform mesh of `fem_elements` over the
     /// structure's length (in proportion, over part of it).
     pub fn new(
         cfg: &LayerConfig,
@@ -59,11 +59,11 @@ impl Layer {
             Method::Fem => {
                 let share = (end - start) / length;
                 let n = ((fem_elements as f64 * share).round() as usize).max(1);
+                let points = [breakpoints, &cfg.joints].concat();
                 let mesh = match cfg.element_length {
-                    Some(h) => FemBasis::aligned(start, end, h, breakpoints),
+                    Some(h) => FemBasis::aligned(start, end, h, &points),
                     // A uniform mesh with nodes on the joints: aligned at its element length.
                     None if !cfg.joints.is_empty() => {
-                        let points = [breakpoints, &cfg.joints].concat();
                         FemBasis::aligned(start, end, (end - start) / n as f64, &points)
                     }
                     None => FemBasis::uniform(start, end, n),

@@ -363,7 +363,7 @@ fn stack(cfg: &Config, extra: usize) -> Vec<Layer> {
                 cfg.extent(i),
                 cfg.discretisation.method,
                 cfg.discretisation.fem_elements,
-                &[coupling_points(cfg, &lc.name), lc.joints.clone()].concat(),
+                &coupling_points(cfg, &lc.name),
                 offset,
             );
             offset += layer.n_dofs();
