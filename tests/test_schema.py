@@ -25,7 +25,7 @@ PAIRS = [
     (C.MovingForce, "MovingForceConfig"),
     (C.Solver, "SolverConfig"),
     (C.Output, "OutputConfig"),
-    (C.TIDs, "TidConfig"),
+    (C.DamperGroup, "DamperGroup"),
 ]
 #: Fields that live on the Python side only (generated here, sent to the core as a profile).
 PYTHON_ONLY = {("Config", "irregularity")}

@@ -22,6 +22,7 @@ from .config import (
     RayleighCoefficients,
     RayleighRatio,
     Solver,
+    DamperGroup,
     Structure,
     TIDs,
     Vehicle,
@@ -47,7 +48,7 @@ from .config import plausible_ranges
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
-    "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "Irregularity", "IrregularityWarning", "irregularity",
+    "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "Irregularity", "IrregularityWarning", "irregularity",
     "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",

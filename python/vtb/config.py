@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
 
+import numpy as np
+
 from .errors import config_error
 from .irregularity import Irregularity
 from .schema import StrictFields
@@ -203,21 +205,40 @@ class Output(StrictFields):
     deck_band: float = _default("OutputConfig", "deck_band")
 
 
-@documented("TidConfig")
+@documented("DamperGroup")
 @dataclass
-class TIDs(StrictFields):
-    """``count`` identical tuned inerter dampers between ``upper`` and ``lower`` at
-    ``x0 + i·spacing``: spring ``stiffness`` (N/m) and dashpot ``damping`` (N·s/m) from the upper
-    layer to an internal node, inerter ``inertance`` (kg) from the node to the lower layer."""
+class DamperGroup(StrictFields):
+    """Identical dampers of one ``kind`` between ``upper`` and ``lower`` (docs/dampers.md), at
+    ``positions`` or at ``x0 + i·spacing`` for ``i < count``. Every kind is a spring
+    ``stiffness`` (N/m) from the upper layer to an internal node and an inerter ``inertance``
+    (kg) from the node to the lower layer (or the ground, where it is a mass); the dashpot
+    ``damping`` (N·s/m) sits beside the spring (``"tid"``, ``"tmd"``) or beside the inerter
+    (``"tvmd"``). ``TIDs`` is the same class, the name of the article's group."""
 
     inertance: float
     stiffness: float
     damping: float
-    count: int
-    x0: float
-    spacing: float
-    upper: str = _default("TidConfig", "upper")
-    lower: str = _default("TidConfig", "lower")
+    count: Optional[int] = _default("DamperGroup", "count")
+    x0: Optional[float] = _default("DamperGroup", "x0")
+    spacing: Optional[float] = _default("DamperGroup", "spacing")
+    positions: Optional[list] = _default("DamperGroup", "positions")
+    upper: str = _default("DamperGroup", "upper")
+    lower: str = _default("DamperGroup", "lower")
+    kind: Literal["tid", "tvmd", "tmd"] = _default("DamperGroup", "kind")
+
+    def locations(self) -> np.ndarray:
+        """The dampers' positions (m): ``positions``, or the pattern ``x0 + i·spacing``."""
+        if self.positions is not None:
+            return np.asarray(self.positions, dtype=float)
+        return self.x0 + (self.spacing or 0.0) * np.arange(self.count or 0)
+
+    def describe(self) -> str:
+        """One line: how many, of which kind and tuning, between which layers."""
+        return (f"{len(self.locations())} {self.kind.upper()} × (b {self.inertance:g} kg, k {self.stiffness:g} N/m, "
+                f"c {self.damping:g} N·s/m) {self.upper}–{self.lower}")
+
+
+TIDs = DamperGroup
 
 
 @documented("Config", irregularity="The track irregularity under the wheels, generated on the Python side (:class:`vtb.Irregularity`; m, positive = dip).")
@@ -234,7 +255,8 @@ class Config(StrictFields):
     solver: Solver = field(default_factory=Solver)
     output: Output = field(default_factory=Output)
     irregularity: Irregularity = field(default_factory=Irregularity)
-    tids: Optional[TIDs] = _default("Config", "tids")
+    tids: Optional[DamperGroup] = _default("Config", "tids")
+    dampers: list = _default("Config", "dampers")
     accept_implausible: list = _default("Config", "accept_implausible")
 
     def __repr__(self) -> str:
@@ -247,11 +269,11 @@ class Config(StrictFields):
             )
             irr = self.irregularity
             irr_text = irr.kind if irr.kind in ("none", "sampled") else f"{irr.kind} seed {irr.seed}, scale {irr.scale:g}"
-            t = self.tids
-            tids = "none" if t is None else f"{t.count} × (b_t {t.inertance:g} kg, k_t {t.stiffness:g} N/m, c_t {t.damping:g} N·s/m) {t.upper}–{t.lower}"
+            groups = ([self.tids] if self.tids is not None else []) + list(self.dampers)
+            tids = "; ".join(g.describe() for g in groups) or "none"
             end = "auto" if self.solver.t_end is None else f"{self.solver.t_end:g} s"
             return (f"Config({self.discretisation.method}: {layers}; L = {self.structure.length:g} m; {len(self.vehicles)} car(s), "
-                    f"{len(self.forces)} force(s) at {self.speed:g} m/s; dt = {self.solver.dt:g} s, t_end {end}; irregularity {irr_text}; TIDs {tids})")
+                    f"{len(self.forces)} force(s) at {self.speed:g} m/s; dt = {self.solver.dt:g} s, t_end {end}; irregularity {irr_text}; dampers {tids})")
         except Exception:  # noqa: BLE001 - a malformed config still has a representation
             return f"Config(<{len(self.__dict__)} fields; to_dict() shows them>)"
 
@@ -405,7 +427,7 @@ def _to_plain(obj):
     return obj
 
 
-_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): Vehicle, ("Config", "forces"): MovingForce, ("Irregularity", "parts"): Irregularity}
+_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): Vehicle, ("Config", "forces"): MovingForce, ("Config", "dampers"): DamperGroup, ("Irregularity", "parts"): Irregularity}
 
 
 def _from_plain(cls, data, path: str):

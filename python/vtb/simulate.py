@@ -441,8 +441,8 @@ def simulate_batch(
     """Runs many configurations in parallel in Rust and returns each run's metrics dict (or,
     with ``histories=True``, its full :class:`Result`).
 
-    Configurations that differ only in their dampers' parameters (``tids.inertance``,
-    ``stiffness``, ``damping``) or in their irregularity share one assembled model and run in
+    Configurations that differ only in their dampers' parameters (``inertance``,
+    ``stiffness``, ``damping`` of ``tids`` or of any group in ``dampers``) or in their irregularity share one assembled model and run in
     lockstep groups of up to ``lanes`` jobs (1, 2, 4 or 8; 1 runs every job alone; None: the
     measured default of the engine, :data:`DEFAULT_LANES` or on a synthesis
     :data:`SYNTHESIS_LANES`): a job's

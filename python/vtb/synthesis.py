@@ -115,7 +115,7 @@ def _structure_config(config: Config) -> Config:
     if not isinstance(config, Config):
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
     c = config.copy()
-    c.tids = None
+    c.tids, c.dampers = None, []
     c.discretisation.synthesis_cutoff = None
     return c
 

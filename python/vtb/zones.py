@@ -104,8 +104,11 @@ def track_zones(config: Config, approach: float = 50.0, exit: float = 50.0,
         v.x_front += a
     for f in out.forces:
         f.x0 += a
-    if out.tids is not None:
-        out.tids.x0 += a
+    for g in ([out.tids] if out.tids is not None else []) + out.dampers:
+        if g.positions is not None:
+            g.positions = [x + a for x in g.positions]
+        else:
+            g.x0 += a
     out.output.points = [x + a for x in out.output.points] or [a + old / 2]
     for part in (out.irregularity, *out.irregularity.parts):
         for name in _POSITIONS.get(part.kind, ()):

@@ -38,7 +38,7 @@ pub fn model_bytes(cfg: &Config) -> f64 {
     }
     let n = modal + fem;
     let matrices = MATRIX_COPIES * (modal * modal + fem * FEM_ROW) * F64;
-    let m = cfg.tids.as_ref().map_or(0.0, |t| t.count as f64);
+    let m = cfg.damper_params().len() as f64;
     // Y = A₀⁻¹W (n × m), WᵀY and the lanes' m × m damper matrices.
     let dampers = (n * m + (2.0 + crate::simulate::MAX_LANES as f64) * m * m) * F64;
     matrices + dampers
@@ -95,11 +95,13 @@ pub fn check_model(cfg: &Config) -> Result<()> {
     if bytes <= budget {
         return Ok(());
     }
-    let (field, value) = if cfg.tids.as_ref().is_some_and(|t| t.count > 100) {
-        (
-            "tids.count".to_string(),
-            cfg.tids.as_ref().unwrap().count.to_string(),
-        )
+    let largest = cfg
+        .damper_groups()
+        .into_iter()
+        .map(|(path, g)| (path, g.locations().len()))
+        .max_by_key(|&(_, n)| n);
+    let (field, value) = if let Some((path, n)) = largest.filter(|&(_, n)| n > 100) {
+        (format!("{path}.count"), n.to_string())
     } else if cfg.discretisation.method == Method::Fem {
         (
             "discretisation.fem_elements".into(),

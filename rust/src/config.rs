@@ -3,6 +3,7 @@
 //!
 //! Units are SI throughout (m, s, kg, N, Pa). Displacements are positive downward.
 
+use crate::dampers::{DamperKind, DamperParams};
 use crate::error::{Result, VtbError};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -32,9 +33,14 @@ pub struct Config {
     /// Observation points and the metrics' analysis window.
     #[serde(default)]
     pub output: OutputConfig,
-    /// Tuned inerter dampers between two layers (optional; none by default).
+    /// The tuned inerter dampers between two layers (optional; none by default): the group
+    /// the studies vary.
     #[serde(default)]
-    pub tids: Option<TidConfig>,
+    pub tids: Option<DamperGroup>,
+    /// Further damper groups, each of its own kind, tuning and positions; their internal
+    /// nodes follow those of `tids`.
+    #[serde(default)]
+    pub dampers: Vec<DamperGroup>,
     /// Field paths (e.g. `"speed"`, `"structure.couplings[3].stiffness"`) whose values may lie
     /// outside their plausible range (docs/limits.md, `vtb.plausible_ranges()`); any other
     /// such value is refused as a likely unit mistake.
@@ -496,30 +502,66 @@ fn default_deck_band() -> f64 {
     30.0
 }
 
-/// N_t identical tuned inerter dampers between `upper` and `lower` at x0 + i·spacing.
+/// A group of identical dampers of one kind between `upper` and `lower` (docs/dampers.md), at
+/// `positions` or at x0 + i·spacing, i < count.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct TidConfig {
-    /// Inertance b_t (kg) of each damper, from its internal node to the lower layer.
+pub struct DamperGroup {
+    /// `"tid"` (spring ∥ dashpot, then inerter), `"tvmd"` (spring, then inerter ∥ dashpot)
+    /// or `"tmd"` (a mass `inertance` on spring ∥ dashpot; `lower` must be `"ground"`).
+    #[serde(default)]
+    pub kind: DamperKind,
+    /// Inertance b (kg) of each damper (a TMD's mass), from its internal node to the lower layer.
     pub inertance: f64,
-    /// Spring stiffness k_t (N/m) of each damper, from the upper layer to its internal node.
+    /// Spring stiffness k (N/m) of each damper, from the upper layer to its internal node.
     pub stiffness: f64,
-    /// Dashpot damping c_t (N·s/m) of each damper, parallel to its spring.
+    /// Dashpot damping c (N·s/m) of each damper: parallel to the spring (TID, TMD) or to the
+    /// inerter (TVMD).
     pub damping: f64,
-    /// Number of dampers (count).
-    pub count: usize,
-    /// Position of the first damper (m).
-    pub x0: f64,
-    /// Distance between neighbouring dampers (m).
-    pub spacing: f64,
+    /// Number of dampers (count) of the pattern x0 + i·spacing; omitted with `positions`.
+    #[serde(default)]
+    pub count: Option<usize>,
+    /// Position of the pattern's first damper (m).
+    #[serde(default)]
+    pub x0: Option<f64>,
+    /// Distance between neighbouring dampers of the pattern (m); needed when count > 1.
+    #[serde(default)]
+    pub spacing: Option<f64>,
+    /// Explicit positions of the dampers (m), instead of the pattern.
+    #[serde(default)]
+    pub positions: Option<Vec<f64>>,
     /// The layer the springs attach to (name, no unit).
     #[serde(default = "default_tid_upper")]
     pub upper: String,
     /// The layer the inerters attach to (name, no unit), or `"ground"`: an inerter to the
-    /// fixed ground is a mass b_t on the internal node, so the device is a tuned mass damper
-    /// hanging from `upper` (mass b_t, spring k_t, dashpot c_t).
+    /// fixed ground is a mass b on the internal node (a TID to the ground is a TMD).
     #[serde(default = "default_tid_lower")]
     pub lower: String,
+}
+
+impl DamperGroup {
+    /// The dampers' positions (m), from `positions` or the pattern (validated configs).
+    pub fn locations(&self) -> Vec<f64> {
+        match &self.positions {
+            Some(p) => p.clone(),
+            None => {
+                let (x0, h) = (self.x0.unwrap_or(0.0), self.spacing.unwrap_or(0.0));
+                (0..self.count.unwrap_or(0))
+                    .map(|i| x0 + i as f64 * h)
+                    .collect()
+            }
+        }
+    }
+
+    /// The parameters of each of its dampers.
+    pub fn params(&self) -> DamperParams {
+        DamperParams {
+            kind: self.kind,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            inertance: self.inertance,
+        }
+    }
 }
 
 fn default_tid_upper() -> String {
@@ -844,9 +886,7 @@ impl Config {
         self.validate_output(dt)?;
         self.validate_profile(profile)?;
         self.validate_treads(profile)?;
-        if let Some(t) = &self.tids {
-            self.validate_tids(t, length)?;
-        }
+        self.validate_dampers(length)?;
         crate::budget::check_model(self)
     }
 
@@ -1314,87 +1354,178 @@ impl Config {
         Ok(())
     }
 
-    fn validate_tids(&self, t: &TidConfig, length: f64) -> Result<()> {
-        positive("tids.inertance", t.inertance)?;
-        // Without a spring the internal node has no static position (the inerter carries no
-        // static force): k_t → 0 is a limit, not a value.
-        positive("tids.stiffness", t.stiffness)?;
-        non_negative("tids.damping", t.damping)?;
-        if t.count == 0 {
-            return Err(VtbError::config(
-                "tids.count",
-                0,
-                "must be >= 1 (omit `tids` for no dampers)",
-            ));
+    /// Every damper group (`damper_groups`), and their total count.
+    fn validate_dampers(&self, length: f64) -> Result<()> {
+        let mut total = 0;
+        for (path, g) in self.damper_groups() {
+            g.validate(&path, length)?;
+            self.dampers_on_layers(&path, g)?;
+            total += g.locations().len();
         }
-        if t.count > MAX_TIDS {
+        if total > MAX_TIDS {
+            let (path, g) = self.damper_groups().pop().expect("dampers counted");
             return Err(VtbError::config(
-                "tids.count",
-                t.count,
+                if g.positions.is_some() { format!("{path}.positions") } else { format!("{path}.count") },
+                total,
                 format!(
-                    "must be <= {MAX_TIDS}: the dampers' coupling is a dense count × count matrix \
-                     inverted once per run and applied every step"
-                ),
-            ));
-        }
-        within("tids.x0", t.x0, 0.0, length, "the structure")?;
-        if t.count > 1 {
-            positive("tids.spacing", t.spacing)?;
-            let last = t.x0 + t.spacing * (t.count - 1) as f64;
-            if last > length + 1e-9 {
-                return Err(VtbError::config(
-                    "tids.count",
-                    t.count,
-                    format!(
-                        "the last damper would sit at x = {last:.4} m, beyond the structure length {length}"
-                    ),
-                ));
-            }
-        }
-        let upper = self.layer_index(&t.upper).ok_or_else(|| {
-            VtbError::config(
-                "tids.upper",
-                format!("{:?}", t.upper),
-                "no layer of that name",
-            )
-        })?;
-        self.tids_on_layer(t, upper)?;
-        if t.lower == GROUND {
-            return Ok(());
-        }
-        let lower = self.layer_index(&t.lower).ok_or_else(|| {
-            VtbError::config(
-                "tids.lower",
-                format!("{:?}", t.lower),
-                "no layer of that name (or \"ground\")",
-            )
-        })?;
-        if upper == lower {
-            return Err(VtbError::config(
-                "tids.lower",
-                format!("{:?}", t.lower),
-                "must differ from tids.upper",
-            ));
-        }
-        self.tids_on_layer(t, lower)
-    }
-
-    /// The first and the last damper on layer `i`.
-    fn tids_on_layer(&self, t: &TidConfig, i: usize) -> Result<()> {
-        let last = t.x0 + t.spacing * t.count.saturating_sub(1) as f64;
-        self.on_layer("tids.x0", t.x0, i)?;
-        let (a, b) = self.extent(i);
-        if last > b + 1e-9 {
-            return Err(VtbError::config(
-                "tids.count",
-                t.count,
-                format!(
-                    "the last damper would sit at x = {last:.4} m, off layer {:?} [{a}, {b}]",
-                    self.structure.layers[i].name
+                    "all groups together hold {total} dampers, more than {MAX_TIDS}: their \
+                     coupling is a dense matrix inverted once per run and applied every step"
                 ),
             ));
         }
         Ok(())
+    }
+
+    /// The damper groups with their field paths: `tids` first, then `dampers[i]`.
+    pub fn damper_groups(&self) -> Vec<(String, &DamperGroup)> {
+        self.tids
+            .iter()
+            .map(|g| ("tids".to_string(), g))
+            .chain(
+                self.dampers
+                    .iter()
+                    .enumerate()
+                    .map(|(i, g)| (format!("dampers[{i}]"), g)),
+            )
+            .collect()
+    }
+
+    /// Every damper of every group, in node order.
+    pub fn damper_params(&self) -> Vec<DamperParams> {
+        self.damper_groups()
+            .into_iter()
+            .flat_map(|(_, g)| vec![g.params(); g.locations().len()])
+            .collect()
+    }
+
+    /// A group's layers exist, differ, and hold every one of its dampers.
+    fn dampers_on_layers(&self, path: &str, g: &DamperGroup) -> Result<()> {
+        let upper = self.layer_index(&g.upper).ok_or_else(|| {
+            VtbError::config(
+                format!("{path}.upper"),
+                format!("{:?}", g.upper),
+                "no layer of that name",
+            )
+        })?;
+        let mut layers = vec![upper];
+        if g.lower != GROUND {
+            let lower = self.layer_index(&g.lower).ok_or_else(|| {
+                VtbError::config(
+                    format!("{path}.lower"),
+                    format!("{:?}", g.lower),
+                    "no layer of that name (or \"ground\")",
+                )
+            })?;
+            if upper == lower {
+                return Err(VtbError::config(
+                    format!("{path}.lower"),
+                    format!("{:?}", g.lower),
+                    format!("must differ from {path}.upper"),
+                ));
+            }
+            layers.push(lower);
+        }
+        let field = match g.positions {
+            Some(_) => format!("{path}.positions"),
+            None => format!("{path}.x0"),
+        };
+        for i in layers {
+            for x in g.locations() {
+                self.on_layer(&field, x, i)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl DamperGroup {
+    /// Parameters, kind and positions (on [0, length]; layers are checked by the config).
+    pub fn validate(&self, path: &str, length: f64) -> Result<()> {
+        let at = |f: &str| format!("{path}.{f}");
+        positive(&at("inertance"), self.inertance)?;
+        // Without a spring the internal node has no static position (the inerter carries no
+        // static force): k → 0 is a limit, not a value.
+        positive(&at("stiffness"), self.stiffness)?;
+        non_negative(&at("damping"), self.damping)?;
+        if self.kind.grounded() && self.lower != GROUND {
+            return Err(VtbError::config(
+                at("lower"),
+                format!("{:?}", self.lower),
+                format!("a {} hangs from one layer: lower must be \"ground\"", self.kind.name()),
+            ));
+        }
+        match (&self.positions, self.count, self.x0, self.spacing) {
+            (Some(p), None, None, None) => {
+                if p.is_empty() {
+                    return Err(VtbError::config(
+                        at("positions"),
+                        "[]",
+                        "must hold at least one position (omit the group for no dampers)",
+                    ));
+                }
+                if p.len() > MAX_TIDS {
+                    return Err(VtbError::config(at("positions"), p.len(), format!("must hold at most {MAX_TIDS} positions")));
+                }
+                for (i, &x) in p.iter().enumerate() {
+                    within(&format!("{path}.positions[{i}]"), x, 0.0, length, "the structure")?;
+                }
+                Ok(())
+            }
+            (None, Some(count), Some(x0), spacing) => {
+                if count == 0 {
+                    return Err(VtbError::config(
+                        at("count"),
+                        0,
+                        "must be >= 1 (omit the group for no dampers)",
+                    ));
+                }
+                if count > MAX_TIDS {
+                    return Err(VtbError::config(
+                        at("count"),
+                        count,
+                        format!(
+                            "must be <= {MAX_TIDS}: the dampers' coupling is a dense count × count \
+                             matrix inverted once per run and applied every step"
+                        ),
+                    ));
+                }
+                within(&at("x0"), x0, 0.0, length, "the structure")?;
+                if count > 1 {
+                    let h = spacing.ok_or_else(|| {
+                        VtbError::config(at("spacing"), "None", "is needed when count > 1")
+                    })?;
+                    positive(&at("spacing"), h)?;
+                    let last = x0 + h * (count - 1) as f64;
+                    if last > length + 1e-9 {
+                        return Err(VtbError::config(
+                            at("count"),
+                            count,
+                            format!(
+                                "the last damper would sit at x = {last:.4} m, beyond the structure length {length}"
+                            ),
+                        ));
+                    }
+                } else if let Some(h) = spacing {
+                    finite(&at("spacing"), h)?;
+                }
+                Ok(())
+            }
+            (Some(_), ..) => Err(VtbError::config(
+                at("positions"),
+                "given",
+                "give either positions or the pattern count, x0, spacing, not both",
+            )),
+            (None, None, ..) => Err(VtbError::config(
+                at("count"),
+                "None",
+                "give the pattern count, x0 (and spacing), or positions",
+            )),
+            (None, Some(_), None, _) => Err(VtbError::config(
+                at("x0"),
+                "None",
+                "is needed with count",
+            )),
+        }
     }
 }
 

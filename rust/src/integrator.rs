@@ -26,14 +26,15 @@
 //! forces and damper parameters, stored interleaved, and does exactly the operations of a
 //! single run (docs/batches.md).
 //!
-//! Tuned inerter dampers (`Attachment`) are not factorised with A: a damper's point shape
+//! Dampers (`Attachment`, crate::dampers) are not factorised with A: a damper's point shape
 //! vectors would fill the sparse factor. Its internal node is eliminated within the step
-//! (spring–dashpot α_r = Δt·c + Δt²k/2 in series with the inerter α_s = 2b), leaving the rank-one
+//! (upper branch α_r in series with lower branch α_s, `Branch::step_impedance`), leaving the rank-one
 //! term κ·w·wᵀ on A, w = N_upper − N_lower, κ = α_rα_s/(α_r + α_s), which the Woodbury identity
 //! A⁻¹ = A₀⁻¹ − Y·S⁻¹·Yᵀ (Y = A₀⁻¹W, S = K⁻¹ + WᵀA₀⁻¹W) applies with precomputed Y.
 
 use crate::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::basis::Shape;
+use crate::dampers::{Attachment, DamperParams};
 use crate::error::Result;
 use crate::sparse::{CsrMatrix, Ldlt, SymOperator};
 
@@ -233,37 +234,6 @@ impl Engine {
     }
 }
 
-/// A tuned inerter damper (docs/model.md §5): spring `stiffness` ∥ dashpot `damping` from the
-/// `upper` point to the internal node DOF `node`, inerter `inertance` from the node to the
-/// `lower` point (shape vectors and node in the original numbering).
-#[derive(Clone, Debug)]
-pub struct Attachment {
-    pub upper: Shape,
-    pub lower: Shape,
-    pub node: usize,
-    pub stiffness: f64,
-    pub damping: f64,
-    pub inertance: f64,
-}
-
-/// The parameters of one damper: what may differ between the lanes of a batch.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DamperParams {
-    pub stiffness: f64,
-    pub damping: f64,
-    pub inertance: f64,
-}
-
-impl From<&Attachment> for DamperParams {
-    fn from(a: &Attachment) -> Self {
-        Self {
-            stiffness: a.stiffness,
-            damping: a.damping,
-            inertance: a.inertance,
-        }
-    }
-}
-
 /// Shape vectors of all dampers' upper (or lower) points stored densely on the union of
 /// their indices, so that a step gathers and scatters each stepper vector once and the
 /// per-damper work is contiguous dots and axpys (the modal rail shapes of all dampers share
@@ -334,7 +304,9 @@ struct Attached {
     lower: ShapeSet,
     /// Stepper index of each internal node.
     node: Vec<usize>,
-    /// α_r = Δt·c + Δt²k/2 and α_s = 2b (their parts of A), k and b.
+    /// α_r and α_s, the upper and lower branches' parts of A; the upper branch's k and the
+    /// lower branch's b (their parts of K and M: the upper branch has no inerter, the lower
+    /// no spring).
     alpha_r: Vec<f64>,
     alpha_s: Vec<f64>,
     k: Vec<f64>,
@@ -394,15 +366,13 @@ impl Attached {
         let nt = self.len();
         let mut sm = self.wty.clone();
         for (i, p) in params.iter().enumerate() {
-            let (ar, as_) = (
-                dt * p.damping + 0.5 * dt * dt * p.stiffness,
-                2.0 * p.inertance,
-            );
+            let [up, lo] = p.branches();
+            let (ar, as_) = (up.step_impedance(dt), lo.step_impedance(dt));
             let q = i * lanes + lane;
             self.alpha_r[q] = ar;
             self.alpha_s[q] = as_;
-            self.k[q] = p.stiffness;
-            self.b[q] = p.inertance;
+            self.k[q] = up.stiffness;
+            self.b[q] = lo.inertance;
             sm[i * nt + i] += 1.0 / (ar * as_ / (ar + as_));
         }
         let inv = invert_spd(&sm, nt)?;
@@ -608,7 +578,7 @@ impl<const W: usize> Newmark<W> {
             *v = vec![0.0; nt * W];
         }
         att.s_inv = vec![0.0; nt * nt * W];
-        let params: Vec<DamperParams> = attachments.iter().map(DamperParams::from).collect();
+        let params: Vec<DamperParams> = attachments.iter().map(|a| a.params).collect();
         for lane in 0..W {
             att.set_params(lane, W, self.dt, &params)?;
         }
@@ -1119,6 +1089,7 @@ impl<const W: usize> Newmark<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dampers::DamperKind;
     use crate::sparse::Assembler;
 
     fn scalar(v: f64) -> CsrMatrix {
@@ -1171,7 +1142,7 @@ mod tests {
 
     /// The dampers' Woodbury path against the same system with the damper assembled into
     /// M, K, C (a second method), with a linear spring acting through a port, for forward and
-    /// column ports.
+    /// column ports and each kind.
     #[test]
     fn dampers_by_woodbury_match_assembled_matrices() {
         let n = 5;
@@ -1188,6 +1159,7 @@ mod tests {
         }
         let (m0, k0) = (am.finish(), ak.finish());
         let c0 = CsrMatrix::combine(&[(0.3, &m0), (1e-3, &k0)]);
+        for kind in [DamperKind::Tid, DamperKind::Tvmd] {
         let att = Attachment {
             upper: Shape {
                 start: 1,
@@ -1198,16 +1170,19 @@ mod tests {
                 values: vec![1.0],
             },
             node: n,
-            stiffness: 50.0,
-            damping: 0.5,
-            inertance: 0.2,
+            params: DamperParams {
+                kind,
+                stiffness: 50.0,
+                damping: 0.5,
+                inertance: 0.2,
+            },
         };
         // Full matrices with the node as DOF n: the damper assembled as a finite element.
-        let [mf, kf, cf] = crate::structure::with_dampers(
+        let [mf, kf, cf] = crate::dampers::stamp(
             [&m0, &k0, &c0],
             n + 1,
             std::slice::from_ref(&att),
-            &[DamperParams::from(&att)],
+            &[att.params],
         );
         let port = Shape {
             start: 0,
@@ -1248,9 +1223,10 @@ mod tests {
             for (x, y) in ra.iter().zip(&rb) {
                 assert!(
                     (x - y).abs() < 1e-10 * scale,
-                    "port_len {port_len}: {x} vs {y}"
+                    "{kind:?}, port_len {port_len}: {x} vs {y}"
                 );
             }
+        }
         }
     }
 }

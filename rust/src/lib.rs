@@ -18,6 +18,7 @@ pub mod comfort;
 pub mod config;
 pub mod contact;
 pub mod couplings;
+pub mod dampers;
 pub mod error;
 pub mod fesea;
 pub mod filter;

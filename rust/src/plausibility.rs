@@ -40,8 +40,12 @@ fn vehicles(c: &Config, f: fn(&crate::config::VehicleConfig) -> f64) -> Vec<f64>
     c.vehicles.iter().map(f).collect()
 }
 
-fn tids(c: &Config, f: fn(&crate::config::TidConfig) -> f64) -> Vec<f64> {
+fn tids(c: &Config, f: fn(&crate::config::DamperGroup) -> f64) -> Vec<f64> {
     c.tids.iter().map(f).collect()
+}
+
+fn dampers(c: &Config, f: fn(&crate::config::DamperGroup) -> f64) -> Vec<f64> {
+    c.dampers.iter().map(f).collect()
 }
 
 /// The table (SI units).
@@ -181,6 +185,22 @@ pub const RANGES: &[Range] = &[
         unit: "N/m",
         covers: "damper springs",
         get: |c| tids(c, |t| t.stiffness),
+    },
+    Range {
+        field: "dampers[*].inertance",
+        min: 1e-3,
+        max: 1e5,
+        unit: "kg",
+        covers: "inerters and tuned masses",
+        get: |c| dampers(c, |t| t.inertance),
+    },
+    Range {
+        field: "dampers[*].stiffness",
+        min: 1e3,
+        max: 1e11,
+        unit: "N/m",
+        covers: "damper springs",
+        get: |c| dampers(c, |t| t.stiffness),
     },
     Range {
         field: "solver.dt",

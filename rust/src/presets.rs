@@ -168,6 +168,7 @@ pub fn paper() -> Config {
             ..OutputConfig::default()
         },
         tids: None,
+        dampers: Vec::new(),
         accept_implausible: Vec::new(),
     }
 }

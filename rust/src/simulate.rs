@@ -6,7 +6,8 @@ use crate::config::{Config, InitialState, Profile};
 use crate::contact::{ContactSolver, compression, patch_half_length};
 use crate::error::{Result, VtbError};
 use crate::fesea::FeSea;
-use crate::integrator::{DamperParams, GW, Newmark, PortBlock};
+use crate::dampers::DamperParams;
+use crate::integrator::{GW, Newmark, PortBlock};
 use crate::model::Model;
 use crate::results::{ContactLoss, Record, RunResult};
 use crate::sparse::{Assembler, CsrMatrix, Ldlt};
@@ -134,24 +135,17 @@ pub struct LaneSpec<'a> {
 
 impl<'a> LaneSpec<'a> {
     pub fn of(config: &Config, profile: &'a Profile) -> Self {
-        let dampers = config.tids.as_ref().map_or_else(Vec::new, |t| {
-            vec![
-                DamperParams {
-                    stiffness: t.stiffness,
-                    damping: t.damping,
-                    inertance: t.inertance,
-                };
-                t.count
-            ]
-        });
-        Self { profile, dampers }
+        Self {
+            profile,
+            dampers: config.damper_params(),
+        }
     }
 }
 
 /// Jobs that may share one model: configurations equal up to the dampers' parameters.
 pub fn model_key(cfg: &Config) -> String {
     let mut c = cfg.clone();
-    if let Some(t) = &mut c.tids {
+    for t in c.tids.iter_mut().chain(c.dampers.iter_mut()) {
         (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);
     }
     serde_json::to_string(&c).expect("a config serialises")
@@ -664,16 +658,16 @@ impl<'m, const W: usize> Simulation<'m, W> {
             &contact_dofs,
             st.layers[0].basis.shape_len(),
             st.node_blocks().as_deref(),
-            &st.tids,
+            &st.dampers,
         )?;
         for lane in lanes {
-            if lane.dampers.len() != st.tids.len() {
+            if lane.dampers.len() != st.dampers.len() {
                 return Err(VtbError::config(
-                    "tids.count",
+                    "dampers",
                     lane.dampers.len(),
                     format!(
                         "a lockstep group needs {} dampers in every job",
-                        st.tids.len()
+                        st.dampers.len()
                     ),
                 ));
             }
@@ -899,7 +893,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
         self.f_prev = self.track.to_stepper(&f0);
         // Each lane's state from its own matrices (its dampers' parameters), as in a single
         // run; lanes with the model's own parameters share them.
-        let own: Vec<DamperParams> = st.tids.iter().map(DamperParams::from).collect();
+        let own: Vec<DamperParams> = st.dampers.iter().map(|a| a.params).collect();
         let mut own_state: Option<(Vec<f64>, Vec<f64>)> = None;
         for j in 0..W {
             if self.lanes[j].error.is_some() {
@@ -1282,19 +1276,22 @@ pub(crate) fn accelerations(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::TidConfig;
+    use crate::config::DamperGroup;
+    use crate::dampers::DamperKind;
     use crate::presets;
 
     fn short_with_dampers() -> Config {
         let mut cfg = presets::paper();
         cfg.solver.t_end = Some(0.05);
-        cfg.tids = Some(TidConfig {
+        cfg.tids = Some(DamperGroup {
+            kind: DamperKind::Tid,
             inertance: 3.0,
             stiffness: 1e8,
             damping: 1e3,
-            count: 3,
-            x0: 30.0,
-            spacing: 0.64,
+            count: Some(3),
+            x0: Some(30.0),
+            spacing: Some(0.64),
+            positions: None,
             upper: "rail".into(),
             lower: "slab".into(),
         });
@@ -1323,6 +1320,7 @@ mod tests {
         let param = |k: f64, b: f64| {
             vec![
                 DamperParams {
+                    kind: DamperKind::Tid,
                     stiffness: k,
                     damping: 1e3,
                     inertance: b,

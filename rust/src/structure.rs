@@ -2,11 +2,11 @@
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
 use crate::basis::{LayerBasis, ModalBasis, Shape};
-use crate::config::{Config, CouplingKind, GROUND, Method, TidConfig};
+use crate::config::{Config, CouplingKind, GROUND, Method};
 use crate::couplings::{add_continuous, add_discrete};
 use crate::error::Result;
 use crate::fesea::FeSea;
-use crate::integrator::{Attachment, DamperParams};
+use crate::dampers::{Attachment, DamperParams, stamp};
 use crate::layers::{Derivative, Layer, gram_blocks};
 use crate::sparse::{Assembler, CsrMatrix};
 
@@ -20,9 +20,9 @@ pub struct Structure {
     pub c: CsrMatrix,
     /// The FE–SEA correction of the rail (hybrid method), already added to `m`, `k` and `c`.
     pub fesea: Option<FeSea>,
-    /// The tuned inerter dampers (internal node DOFs after the layers'), included in `m`,
+    /// The dampers of every group (internal node DOFs after the layers'), included in `m`,
     /// `k`, `c`.
-    pub tids: Vec<Attachment>,
+    pub dampers: Vec<Attachment>,
     /// `m`, `k`, `c` without the dampers, on the layers' DOFs: the time stepper factors these
     /// and takes the dampers as rank-one updates (`None`: no dampers, use `m`, `k`, `c`).
     pub base: Option<[CsrMatrix; 3]>,
@@ -38,7 +38,7 @@ impl Structure {
         let method = cfg.discretisation.method;
         let layers = stack(cfg, 0);
         let n_layers: usize = layers.iter().map(Layer::n_dofs).sum();
-        let n = n_layers + cfg.tids.as_ref().map_or(0, |t| t.count);
+        let n = n_layers + cfg.damper_params().len();
         let fesea = match method {
             Method::Hybrid => Some(FeSea::new(cfg, &layers[0])?),
             _ => None,
@@ -104,16 +104,16 @@ impl Structure {
             k: CsrMatrix::zeros(0),
             c: CsrMatrix::zeros(0),
             fesea,
-            tids: Vec::new(),
+            dampers: Vec::new(),
             base: None,
             edge_ramp: cfg.solver.edge_ramp,
         };
         let [m, k, c] = [am, ak, ac].map(Assembler::finish);
-        if let Some(t) = &cfg.tids {
-            structure.tids = structure.tid_attachments(t, cfg, n_layers);
-            let params: Vec<DamperParams> = structure.tids.iter().map(DamperParams::from).collect();
+        structure.dampers = structure.damper_attachments(cfg, n_layers);
+        if !structure.dampers.is_empty() {
+            let params: Vec<DamperParams> = structure.dampers.iter().map(|a| a.params).collect();
             [structure.m, structure.k, structure.c] =
-                with_dampers([&m, &k, &c], n, &structure.tids, &params);
+                stamp([&m, &k, &c], n, &structure.dampers, &params);
             structure.base = Some([m, k, c]);
         } else {
             (structure.m, structure.k, structure.c) = (m, k, c);
@@ -129,26 +129,24 @@ impl Structure {
         }
     }
 
-    /// Tuned inerter dampers (docs/model.md §5): DOF `first + i` is damper i's internal node; spring
-    /// and dashpot from the upper layer's point to it, inerter from it to the lower layer's
-    /// point (none for the ground, which does not move), all through the layers' shape
-    /// vectors (g̃ on a hybrid rail).
-    fn tid_attachments(&self, t: &TidConfig, cfg: &Config, first: usize) -> Vec<Attachment> {
-        let upper = cfg.layer_index(&t.upper).expect("validated");
-        let lower = cfg.layer_index(&t.lower);
-        (0..t.count)
-            .map(|i| {
-                let x = t.x0 + i as f64 * t.spacing;
-                Attachment {
+    /// The dampers of every group (docs/dampers.md), in `Config::damper_groups` order: DOF
+    /// `first + i` is damper i's internal node, its upper and lower points the layers' shape
+    /// vectors there (g̃ on a hybrid rail; none for the ground, which does not move).
+    fn damper_attachments(&self, cfg: &Config, first: usize) -> Vec<Attachment> {
+        let mut out = Vec::new();
+        for (_, g) in cfg.damper_groups() {
+            let upper = cfg.layer_index(&g.upper).expect("validated");
+            let lower = cfg.layer_index(&g.lower);
+            for x in g.locations() {
+                out.push(Attachment {
                     upper: self.shape(upper, x),
                     lower: lower.map_or_else(Shape::default, |l| self.shape(l, x)),
-                    node: first + i,
-                    stiffness: t.stiffness,
-                    damping: t.damping,
-                    inertance: t.inertance,
-                }
-            })
-            .collect()
+                    node: first + out.len(),
+                    params: g.params(),
+                });
+            }
+        }
+        out
     }
 
     /// (M, K) with the dampers at these positions but other parameters (one per damper): the
@@ -156,7 +154,7 @@ impl Structure {
     pub fn with_damper_params(&self, params: &[DamperParams]) -> (CsrMatrix, CsrMatrix) {
         match &self.base {
             Some([m, k, c]) => {
-                let [m, k, _] = with_dampers([m, k, c], self.m.n, &self.tids, params);
+                let [m, k, _] = stamp([m, k, c], self.m.n, &self.dampers, params);
                 (m, k)
             }
             None => (self.m.clone(), self.k.clone()),
@@ -298,45 +296,6 @@ impl Structure {
 
 /// nᵀ·q for a shape vector n.
 #[inline]
-/// M, K, C of `base` (the layers' DOFs) plus the dampers with the given parameters: each
-/// element w·(e_node − N)(e_node − N)ᵀ (inerter on the lower point, spring and dashpot on
-/// the upper one), in matrices of dimension `n`.
-pub(crate) fn with_dampers(
-    base: [&CsrMatrix; 3],
-    n: usize,
-    tids: &[Attachment],
-    params: &[DamperParams],
-) -> [CsrMatrix; 3] {
-    let mut full = base.map(|a| {
-        let mut asm = Assembler::new(n);
-        for i in 0..a.n {
-            for p in a.row_ptr[i]..a.row_ptr[i + 1] {
-                asm.add(i, a.col_idx[p], a.values[p]);
-            }
-        }
-        asm
-    });
-    for (a, p) in tids.iter().zip(params) {
-        let [am, ak, ac] = &mut full;
-        for (asm, s, w) in [
-            (am, &a.lower, p.inertance),
-            (&mut *ak, &a.upper, p.stiffness),
-            (&mut *ac, &a.upper, p.damping),
-        ] {
-            let mut dofs: Vec<usize> = (s.start..s.start + s.values.len()).collect();
-            dofs.push(a.node);
-            let mut v: Vec<f64> = s.values.iter().map(|x| -x).collect();
-            v.push(1.0);
-            let block: Vec<f64> = v
-                .iter()
-                .flat_map(|p| v.iter().map(move |q| p * q))
-                .collect();
-            asm.add_block(&dofs, &block, w);
-        }
-    }
-    full.map(Assembler::finish)
-}
-
 pub fn dot(n: &Shape, q: &[f64]) -> f64 {
     n.values
         .iter()

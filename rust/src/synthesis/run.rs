@@ -27,6 +27,7 @@ use super::{Gains, Reduction};
 use crate::basis::Shape;
 use crate::config::InitialState;
 use crate::contact::{ContactSolver, patch_half_length};
+use crate::dampers::{Branch, BranchState};
 use crate::error::{Result, VtbError};
 use crate::integrator::GW;
 use crate::model::Model;
@@ -90,19 +91,13 @@ struct DamperPort {
 /// A damper of one lane: its parameters and trapezoidal state.
 #[derive(Clone, Debug, Default)]
 struct DamperLane {
+    /// 1/κ = Σ 1/z over the branches (`Branch::step_stiffness`).
     kappa: f64,
-    k: f64,
-    c: f64,
-    b: f64,
-    /// Spring extension and rate; inerter relative displacement, velocity, acceleration.
-    r: f64,
-    rd: f64,
-    s: f64,
-    sd: f64,
-    sdd: f64,
-    /// This step: r̂ and s̃ (F = κ(d − r̂ − s̃)).
-    r_hat: f64,
-    s_tilde: f64,
+    /// Upper and lower branches, their trapezoidal states, and this step's offsets x̂
+    /// (x₁ = F/z + x̂, so F = κ(d − Σx̂)).
+    branches: [Branch; 2],
+    states: [BranchState; 2],
+    offsets: [f64; 2],
 }
 
 /// A lane's own data.
@@ -263,13 +258,13 @@ impl<'a, const W: usize> Run<'a, W> {
             ));
         }
         for spec in specs {
-            if spec.dampers.len() != st.tids.len() {
+            if spec.dampers.len() != st.dampers.len() {
                 return Err(VtbError::config(
-                    "tids.count",
+                    "dampers",
                     spec.dampers.len(),
                     format!(
                         "a lockstep group needs {} dampers in every job",
-                        st.tids.len()
+                        st.dampers.len()
                     ),
                 ));
             }
@@ -333,14 +328,16 @@ impl<'a, const W: usize> Run<'a, W> {
 
         // Dampers: ports, step compliance with the rail near them, and G_dd = Re Σ a1·ψ_d·ψ_e
         // + R(upper_d, upper_e), the same in every lane.
-        let nd = st.tids.len();
-        let damper_x: Vec<f64> = cfg.tids.as_ref().map_or_else(Vec::new, |t| {
-            (0..t.count).map(|i| t.x0 + i as f64 * t.spacing).collect()
-        });
+        let nd = st.dampers.len();
+        let damper_x: Vec<f64> = cfg
+            .damper_groups()
+            .into_iter()
+            .flat_map(|(_, g)| g.locations())
+            .collect();
         let a1 = [&coef.a1[0][..], &coef.a1[1][..]];
         let mut ports: Vec<CVec> = (0..nw).map(|_| CVec::zeros(n)).collect();
         let mut dampers = Vec::with_capacity(nd);
-        for (att, &x) in st.tids.iter().zip(&damper_x) {
+        for (att, &x) in st.dampers.iter().zip(&damper_x) {
             let mut psi = project(&att.upper);
             let low = project(&att.lower);
             for j in 0..n {
@@ -416,12 +413,10 @@ impl<'a, const W: usize> Run<'a, W> {
                     .dampers
                     .iter()
                     .map(|p| {
-                        let (k, c, b) = (p.stiffness, p.damping, p.inertance);
+                        let branches = p.branches();
                         DamperLane {
-                            kappa: 1.0 / (1.0 / (k + 2.0 * c / dt) + dt * dt / (4.0 * b)),
-                            k,
-                            c,
-                            b,
+                            kappa: 1.0 / branches.iter().map(|b| 1.0 / b.step_stiffness(dt)).sum::<f64>(),
+                            branches,
                             ..Default::default()
                         }
                     })
@@ -619,8 +614,10 @@ impl<'a, const W: usize> Run<'a, W> {
             .map(|w| dot(&self.ports[w], &q0) + static_residual(&self.wheel_shapes[w]))
             .collect();
         for lane in self.lanes.iter_mut() {
+            // No static force passes a spring in series with an inerter: the lower branch
+            // (which has no spring) takes the whole static extension.
             for (d, s) in lane.dampers.iter_mut().zip(&d0) {
-                d.s = *s;
+                d.states[1].x = *s;
             }
         }
         for (ci, c) in self.cars.iter_mut().enumerate() {
@@ -755,9 +752,10 @@ impl<'a, const W: usize> Run<'a, W> {
             for e in 0..nd {
                 let free = self.damper_free[e][c] + self.mover_residual(&self.dampers[e].upper);
                 let d = &mut self.lanes[c].dampers[e];
-                d.r_hat = d.c * (2.0 * d.r / dt + d.rd) / (d.k + 2.0 * d.c / dt);
-                d.s_tilde = d.s + dt * d.sd + 0.25 * dt * dt * d.sdd;
-                self.f0[c * nd + e] = d.kappa * (free - d.r_hat - d.s_tilde);
+                for i in 0..2 {
+                    d.offsets[i] = d.states[i].offset(&d.branches[i], dt);
+                }
+                self.f0[c * nd + e] = d.kappa * (free - d.offsets[0] - d.offsets[1]);
                 for w in 0..nw {
                     self.t_mat[(c * nd + e) * nw + w] = d.kappa * self.gdw[e * nw + w];
                 }
@@ -868,14 +866,9 @@ impl<'a, const W: usize> Run<'a, W> {
                         .sum::<f64>();
                 self.forces[nw + e][c] = -f;
                 let d = &mut self.lanes[c].dampers[e];
-                let r1 = f / (d.k + 2.0 * d.c / dt) + d.r_hat;
-                d.rd = 2.0 * (r1 - d.r) / dt - d.rd;
-                d.r = r1;
-                let sdd1 = f / d.b;
-                let sd1 = d.sd + 0.5 * dt * (d.sdd + sdd1);
-                d.s += 0.5 * dt * (d.sd + sd1);
-                d.sd = sd1;
-                d.sdd = sdd1;
+                for i in 0..2 {
+                    d.states[i].advance(&d.branches[i], dt, f, d.offsets[i]);
+                }
             }
         }
     }
