@@ -34,10 +34,10 @@ def main():
     mu = mass * float(np.ravel(first.displacement("bridge", x, mode=0))[0]) ** 2
     w = 2 * math.pi * f1 / (1 + mu)
     zeta = math.sqrt(3 * mu / (8 * (1 + mu) ** 3))
-    tmd = vtb.TIDs(inertance=mass, stiffness=mass * w**2, damping=2 * zeta * mass * w,
-                   count=1, x0=x, spacing=1.0, upper="bridge", lower="ground")
+    tmd = vtb.DamperGroup(kind="tmd", inertance=mass, stiffness=mass * w**2, damping=2 * zeta * mass * w,
+                          positions=[x], upper="bridge", lower="ground")
     with_tmd = cfg.copy()
-    with_tmd.tids = tmd
+    with_tmd.dampers = [tmd]
     runs = vtb.simulate_batch([cfg, with_tmd], progress=False)
     f = np.linspace(0.8 * f1, 1.2 * f1, 161)
     peaks = [np.abs(vtb.receptance(c, x, f, layer="bridge")).max() for c in (cfg, with_tmd)]

@@ -141,3 +141,23 @@ def test_a_group_is_refused_naming_its_path():
         d.dampers = [group]
         with pytest.raises(vtb.ConfigError, match=re.escape(field)):
             d.validate()
+
+
+def test_a_study_varies_any_groups_parameters():
+    """``vtb.study`` over ``dampers[1].stiffness`` (a TVMD group after a TMD group): each case
+    is the run of its own configuration, and the parameter changes the result."""
+    c = _primary("tmd", **TUNING, dt=1e-4, t_end=0.1, initial_state="rest")
+    c.dampers.append(vtb.DamperGroup(kind="tvmd", inertance=2.0, stiffness=1e4, damping=50.0, positions=[0.25], lower="ground"))
+    values = [1e4, 3e4]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.ResolutionWarning)
+        res = vtb.study(c, {"dampers[1].stiffness": values}, indices=["rail_disp_max"], progress=False, threads=1)
+        alone = []
+        for k in values:
+            d = c.copy()
+            d.dampers[1].stiffness = k
+            alone.append(vtb.simulate(d, progress=False).metrics()["rail_disp_max"])
+    col = res.columns
+    got = [col["rail_disp_max"][list(col["dampers[1].stiffness"]).index(k)] for k in values]
+    assert got == pytest.approx(alone, rel=1e-12)
+    assert abs(alone[0] / alone[1] - 1.0) > 1e-4

@@ -30,7 +30,7 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "defect_impacts.py", "receptance_check.py", "speed_study.py",
+    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "damper_kinds.py", "defect_impacts.py", "receptance_check.py", "speed_study.py",
                        "train_passage.py", "viaduct_passage.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
@@ -88,6 +88,16 @@ def test_defect_impacts_example():
     smooth = float(rows.pop("smooth rail")[0])
     assert all(float(r[0]) > 1.3 * smooth for r in rows.values())
     assert float(rows["wheel flat (30 mm, wheel 0)"][3]) > 20
+
+
+def test_damper_kinds_example():
+    """Both rail–slab kinds lower the rail's acceleration and raise the slab's; the four cases
+    are reported against the uncontrolled run."""
+    text = _run("damper_kinds.py")
+    rows = dict(re.findall(r"^\s*(.+?): rail acc rms\s+[\d.]+ m/s² \(\s*([+-][\d.]+) %\)", text, flags=re.M))
+    assert list(rows) == ["no dampers", "10 TIDs", "10 TVMDs", "10 TIDs + a girder TMD"]
+    assert float(rows["10 TIDs"]) < -1.0 and float(rows["10 TVMDs"]) < -1.0
+    assert float(rows["10 TIDs"]) != float(rows["10 TVMDs"])
 
 
 def test_viaduct_passage_example():
