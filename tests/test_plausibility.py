@@ -29,6 +29,8 @@ def config_for(field):
     c = vtb.paper_config()
     if field.startswith("tids."):
         c.tids = vtb.tids_around(c)
+    if field.startswith("dampers["):
+        c.dampers = [vtb.DamperGroup(kind="tvmd", inertance=5.0, stiffness=2e8, damping=1e3, positions=[40.0])]
     return c
 
 

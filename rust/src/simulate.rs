@@ -728,7 +728,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     vec![1.0; nw],
                     cfg.solver.contact_tol,
                     cfg.solver.contact_max_iter,
-                ),
+                )
+                .with_block(N_WHEELS),
                 error,
                 loss_open: vec![None; nw],
             })

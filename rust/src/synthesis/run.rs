@@ -429,7 +429,8 @@ impl<'a, const W: usize> Run<'a, W> {
                         loads.clone(),
                         cfg.solver.contact_tol,
                         cfg.solver.contact_max_iter,
-                    ),
+                    )
+                    .with_block(N_WHEELS),
                     dampers,
                     s_inv,
                     error,
