@@ -213,6 +213,8 @@ struct Run<'a, const W: usize> {
     rail_free: Vec<[f64; W]>,
     element_flex: Vec<f64>,
     near_pairs: Vec<f64>,
+    /// a1·ψ of a wheel (scratch of the near pairs' compliance).
+    scaled_port: CVec,
     /// Per observer and wheel this step: the rail gains at the wheel's shape (λw, w).
     wheel_gains: Vec<[f64; 2]>,
     mover_direct: Vec<[f64; 2]>,
@@ -483,6 +485,7 @@ impl<'a, const W: usize> Run<'a, W> {
             rail_free: vec![[0.0; W]; nw],
             element_flex: vec![0.0; nw],
             near_pairs: vec![0.0; nw * nw],
+            scaled_port: CVec::zeros(n),
             wheel_gains: vec![[0.0; 2]; no * nw],
             mover_direct: vec![[0.0; 2]; no],
             gdw: vec![0.0; nd * nw],
@@ -720,15 +723,22 @@ impl<'a, const W: usize> Run<'a, W> {
                 0.0
             };
         }
+        // Wheels off the rail (inactive) have no compliance with any other.
         let a1 = [&self.coef.a1[0][..], &self.coef.a1[1][..]];
         for wi in 0..nw {
+            let mut scaled = false;
             for vi in wi + 1..nw {
                 let (a, b) = (&self.wheel_shapes[wi], &self.wheel_shapes[vi]);
-                self.near_pairs[wi * nw + vi] = if near(red, a, b) {
-                    scaled_dot(a1, &self.ports[wi], &self.ports[vi]) + red.residual(a, b)
-                } else {
-                    0.0
-                };
+                self.near_pairs[wi * nw + vi] =
+                    if self.active[wi] && self.active[vi] && near(red, a, b) {
+                        if !scaled {
+                            self.scaled_port.set_mul(a1, &self.ports[wi]);
+                            scaled = true;
+                        }
+                        dot(&self.scaled_port, &self.ports[vi]) + red.residual(a, b)
+                    } else {
+                        0.0
+                    };
             }
         }
         for (e, dp) in self.dampers.iter().enumerate() {
