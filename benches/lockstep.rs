@@ -9,7 +9,7 @@
 mod common;
 
 use std::time::Instant;
-use vtb::config::{Config, TidConfig};
+use vtb::config::{Config, DamperGroup};
 use vtb::{BatchOptions, Job, Record, presets, run_batch, simulate};
 
 fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> Vec<Job> {
@@ -23,13 +23,15 @@ fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> 
     cases
         .map(|(b, k, c)| {
             let mut cfg = base.clone();
-            cfg.tids = Some(TidConfig {
+            cfg.tids = Some(DamperGroup {
                 inertance: b,
                 stiffness: k,
                 damping: c,
-                count: 10,
-                x0: 77.12,
-                spacing: 0.64,
+                kind: vtb::dampers::DamperKind::Tid,
+                count: Some(10),
+                x0: Some(77.12),
+                spacing: Some(0.64),
+                positions: None,
                 upper: "rail".into(),
                 lower: "slab".into(),
             });

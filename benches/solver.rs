@@ -20,11 +20,11 @@ fn print_factor_size(cfg: &vtb::config::Config) {
     let st = &model.structure;
     let (m, c, k) = st.stepping_matrices();
     let dt = cfg.solver.dt;
-    let a = vtb::sparse::CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
+    let a = vtb::linalg::sparse::CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
     let rail: Vec<usize> = (0..st.layers[0].n_dofs())
         .map(|i| st.layers[0].offset + i)
         .collect();
-    let f = vtb::sparse::Ldlt::for_stepping(&a, &rail).unwrap();
+    let f = vtb::linalg::sparse::Ldlt::for_stepping(&a, &rail).unwrap();
     // Position of every unknown: its node's x (finite elements).
     let mut x = vec![0.0; a.n];
     for l in &st.layers {
@@ -68,13 +68,15 @@ fn bench_paper(c: &mut Criterion) {
     g.bench_function("hybrid_full_run", |b| b.iter(|| run(&hybrid)));
     // The optimisation's evaluation: the hybrid with 10 rail–slab TIDs (vtb.tids_around).
     let mut tids = presets::paper();
-    tids.tids = Some(vtb::config::TidConfig {
+    tids.tids = Some(vtb::config::DamperGroup {
         inertance: 5.0,
         stiffness: 2e8,
         damping: 1e3,
-        count: 10,
-        x0: 77.12,
-        spacing: 0.64,
+        kind: vtb::dampers::DamperKind::Tid,
+        count: Some(10),
+        x0: Some(77.12),
+        spacing: Some(0.64),
+        positions: None,
         upper: "rail".into(),
         lower: "slab".into(),
     });

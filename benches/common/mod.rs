@@ -19,6 +19,7 @@ pub fn paper_profile() -> Profile {
         x0: meta["x0"].as_f64().unwrap(),
         dx: meta["dx"].as_f64().unwrap(),
         values,
+        treads: Vec::new(),
     }
 }
 
