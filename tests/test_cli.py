@@ -2,6 +2,7 @@
 
 import pytest
 
+import vtb
 from vtb import cli
 
 COMMANDS = ["simulate", "validate", "sweep", "optimize", "reproduce", "examples", "study"]
@@ -106,3 +107,36 @@ def test_study_grid_command_runs_the_generic_study(tmp_path, capsys):
     assert np.isnan(got.columns["speed"][0])
     assert cli.main(["study", "grid", "--vary", "speed=fast", "--out", str(tmp_path / "x.csv"), "--no-progress"]) == 2
     assert "--vary" in capsys.readouterr().err
+
+
+def test_force_sets_stale_journals_aside_and_keeps_the_rest(tmp_path):
+    """A study's run refusing a journal of another configuration: with --force the journal is
+    renamed *.stale and the run retried (matching journals stay); without it, or for a
+    journal in use by another process, the refusal stands."""
+    from vtb.cli import run_setting_aside_stale
+    from vtb.errors import config_error
+
+    stale, kept = tmp_path / "opt.npz.designs.jsonl", tmp_path / "sweep.csv"
+    stale.write_text("old\n")
+    kept.write_text("mine\n")
+    calls = []
+
+    def run():
+        calls.append(1)
+        if stale.exists():
+            raise config_error("checkpoint", str(stale), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
+        return "report"
+
+    with pytest.raises(vtb.ConfigError, match="another optimisation"):
+        run_setting_aside_stale(run, force=False)
+    assert stale.exists()
+    assert run_setting_aside_stale(run, force=True) == "report"
+    assert len(calls) == 3 and not stale.exists() and (tmp_path / "opt.npz.designs.jsonl.stale").read_text() == "old\n"
+    assert kept.read_text() == "mine\n"
+
+    def busy():
+        raise config_error("out", str(kept), "is in use by another sweep (pid 1; lock file x)")
+
+    with pytest.raises(vtb.ConfigError, match="in use"):
+        run_setting_aside_stale(busy, force=True)
+    assert kept.exists()

@@ -53,6 +53,32 @@ def check_out_file(path, option: str, force: bool) -> None:
         raise config_error(option, str(path), "exists: pass --force to overwrite")
 
 
+#: How a journal or checkpoint says it was written for another configuration (an earlier
+#: version of vtb, other settings): what ``--force`` sets aside. A journal in use by another
+#: process is never set aside.
+STALE_REASONS = ("holds the designs of another optimisation", "belongs to another run", "holds a study of another configuration")
+
+
+def run_setting_aside_stale(run, force: bool):
+    """``run()``; with ``force``, each journal or checkpoint it refuses as written for another
+    configuration is renamed ``<name>.stale`` (noted on stderr) and ``run()`` called again. The
+    journals and checkpoints that match are still reused, so nothing valid is repeated."""
+    from .errors import ConfigError
+
+    set_aside = set()
+    while True:
+        try:
+            return run()
+        except ConfigError as e:
+            path = Path(str(e.value)) if e.value is not None else None
+            stale = force and e.reason is not None and any(r in e.reason for r in STALE_REASONS)
+            if not stale or path is None or not path.is_file() or path in set_aside:
+                raise
+            path.replace(path.with_name(path.name + ".stale"))
+            set_aside.add(path)
+            print(f"# set aside {path} as {path.name}.stale: it {e.reason.split(';')[0]}", file=sys.stderr)
+
+
 def check_config_file(path) -> None:
     """``--config`` names a readable file or a shipped example."""
     if path is None:
@@ -327,8 +353,8 @@ def cmd_reproduce(args) -> int:
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its sweep journal and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
     with study_executor(args) as executor:
-        report = run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop, n_gen=args.gen,
-                     optimiser=args.optimiser, executor=executor)
+        report = run_setting_aside_stale(lambda: run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop,
+                                                     n_gen=args.gen, optimiser=args.optimiser, executor=executor), args.force)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -340,7 +366,7 @@ def cmd_study(args) -> int:
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
     with study_executor(args) as executor:
-        report = run(args.out, quick=args.quick, progress=not args.no_progress, executor=executor)
+        report = run_setting_aside_stale(lambda: run(args.out, quick=args.quick, progress=not args.no_progress, executor=executor), args.force)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -440,7 +466,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
     r.add_argument("--optimiser", choices=("warm", "cold", "both"), default="warm", help="warm: seeded from the sweep with the hypervolume stop (default); cold: the article's budget from a random start; both: the two, compared")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
-    r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match)")
+    r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match; those of another configuration are renamed *.stale and their stage runs afresh)")
     scheduler(r)
     r.set_defaults(func=cmd_reproduce)
 
@@ -450,7 +476,7 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--out", required=True, help="output directory")
     rb.add_argument("--quick", action="store_true", help="the same stages on a short record with tiny budgets (about a minute; shows the pipeline, not findings)")
     rb.add_argument("--no-progress", action="store_true", help="no progress bars")
-    rb.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its journals and checkpoints are reused when they match)")
+    rb.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its journals and checkpoints are reused when they match; those of another configuration are renamed *.stale and their stage runs afresh)")
     scheduler(rb)
     rb.set_defaults(func=cmd_study)
     gr = kinds.add_parser("grid", help="any configuration fields over a grid of values, any indices (vtb.study; docs/studies.md)")
