@@ -232,6 +232,12 @@ class DamperGroup(StrictFields):
             return np.asarray(self.positions, dtype=float)
         return self.x0 + (self.spacing or 0.0) * np.arange(self.count or 0)
 
+    def placement(self) -> str:
+        """Where the dampers are: ``"x = x0 m + i·spacing m"`` or the list of positions."""
+        if self.positions is not None:
+            return "x = " + ", ".join(f"{x:g}" for x in self.positions) + " m"
+        return f"x = {self.x0:g} m + i·{self.spacing or 0.0:g} m"
+
     def describe(self) -> str:
         """One line: how many, of which kind and tuning, between which layers."""
         return (f"{len(self.locations())} {self.kind.upper()} × (b {self.inertance:g} kg, k {self.stiffness:g} N/m, "

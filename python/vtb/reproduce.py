@@ -246,7 +246,7 @@ def _report(out: Path, quick, cfg, rows33, sweep_text, runs, table3, car, times,
         f"* Irregularity level: the TB/T 3352 spectrum extrapolated to 0.01–1 m, sample seed 2025, amplitude scaled by "
         f"{PAPER_CALIBRATED_SCALE} so that the uncontrolled rail acceleration amplitude is {ARTICLE_RAIL_ACC} m/s² (the only calibrated number).",
         "* Rayleigh damping per layer, the CRH3 car parameter set, one rail carrying half of each axle load, the car's start position: docs/model-choices.md.",
-        f"* TIDs: {cfg.tids.count} between rail and slab, one per fastener bay around mid-span (x = {cfg.tids.x0:g} m + i·{cfg.tids.spacing:g} m); the article states neither count nor spacing.",
+        f"* TIDs: {len(cfg.tids.locations())} between rail and slab, one per fastener bay around mid-span ({cfg.tids.placement()}); the article states neither count nor spacing.",
         "* FE–SEA: full global–local coupling, ω_r = 2π·800 Hz (docs/fesea.md).",
         "",
         "## §3.3 — hybrid vs FEM, no TID (Fig. 3 → fig3_histories.png)",

@@ -264,7 +264,7 @@ def sweep_report(result: SweepResult, path=None, seconds: Optional[float] = None
         f"{len(result) - 1} TID cases + the uncontrolled baseline"
         + (f", {seconds / 60:.1f} min wall time on {os.cpu_count()} cores (machine load at the end "
            f"{'/'.join(f'{v:.2f}' for v in os.getloadavg())}, 1/5/15 min)" if seconds else "")
-        + f"; {n_fail} failed cases. Dampers: {tids.count} between {tids.upper} and {tids.lower}, x = {tids.x0:g} m + i·{tids.spacing:g} m "
+        + f"; {n_fail} failed cases. Dampers: {len(tids.locations())} between {tids.upper} and {tids.lower}, {tids.placement()} "
         "(one per fastener bay around the observation point). Rail and slab amplitudes at the first observation point.",
         "",
         f"Uncontrolled: a_rm0 = {base['rail_acc_max']:.2f} m/s², a_rRMS0 = {base['rail_acc_rms']:.3f} m/s², "

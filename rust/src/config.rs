@@ -1365,7 +1365,11 @@ impl Config {
         if total > MAX_TIDS {
             let (path, g) = self.damper_groups().pop().expect("dampers counted");
             return Err(VtbError::config(
-                if g.positions.is_some() { format!("{path}.positions") } else { format!("{path}.count") },
+                if g.positions.is_some() {
+                    format!("{path}.positions")
+                } else {
+                    format!("{path}.count")
+                },
                 total,
                 format!(
                     "all groups together hold {total} dampers, more than {MAX_TIDS}: their \
@@ -1451,7 +1455,10 @@ impl DamperGroup {
             return Err(VtbError::config(
                 at("lower"),
                 format!("{:?}", self.lower),
-                format!("a {} hangs from one layer: lower must be \"ground\"", self.kind.name()),
+                format!(
+                    "a {} hangs from one layer: lower must be \"ground\"",
+                    self.kind.name()
+                ),
             ));
         }
         match (&self.positions, self.count, self.x0, self.spacing) {
@@ -1464,10 +1471,20 @@ impl DamperGroup {
                     ));
                 }
                 if p.len() > MAX_TIDS {
-                    return Err(VtbError::config(at("positions"), p.len(), format!("must hold at most {MAX_TIDS} positions")));
+                    return Err(VtbError::config(
+                        at("positions"),
+                        p.len(),
+                        format!("must hold at most {MAX_TIDS} positions"),
+                    ));
                 }
                 for (i, &x) in p.iter().enumerate() {
-                    within(&format!("{path}.positions[{i}]"), x, 0.0, length, "the structure")?;
+                    within(
+                        &format!("{path}.positions[{i}]"),
+                        x,
+                        0.0,
+                        length,
+                        "the structure",
+                    )?;
                 }
                 Ok(())
             }
@@ -1520,11 +1537,9 @@ impl DamperGroup {
                 "None",
                 "give the pattern count, x0 (and spacing), or positions",
             )),
-            (None, Some(_), None, _) => Err(VtbError::config(
-                at("x0"),
-                "None",
-                "is needed with count",
-            )),
+            (None, Some(_), None, _) => {
+                Err(VtbError::config(at("x0"), "None", "is needed with count"))
+            }
         }
     }
 }

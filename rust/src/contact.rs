@@ -223,7 +223,7 @@ impl ContactSolver {
                             kh * a[(b0 + i) * n + b0 + j] + if i == j { 1.0 } else { 0.0 };
                     }
                 }
-                lu_solve_in_place(jac, &mut self.dp[b0..b0 + block], block);
+                crate::linalg::dense::lu_solve_in_place(jac, &mut self.dp[b0..b0 + block], block);
             }
             let mut lambda = 1.0;
             let mut accepted = false;
@@ -281,41 +281,6 @@ impl ContactSolver {
     }
 }
 
-/// Solves J·x = b (row-major n×n, partial pivoting), overwriting J.
-pub fn lu_solve_in_place(j: &mut [f64], b: &mut [f64], n: usize) {
-    for col in 0..n {
-        let mut piv = col;
-        for r in col + 1..n {
-            if j[r * n + col].abs() > j[piv * n + col].abs() {
-                piv = r;
-            }
-        }
-        if piv != col {
-            for c in 0..n {
-                j.swap(col * n + c, piv * n + c);
-            }
-            b.swap(col, piv);
-        }
-        let d = j[col * n + col];
-        for r in col + 1..n {
-            let f = j[r * n + col] / d;
-            if f != 0.0 {
-                for c in col..n {
-                    j[r * n + c] -= f * j[col * n + c];
-                }
-                b[r] -= f * b[col];
-            }
-        }
-    }
-    for r in (0..n).rev() {
-        let mut s = b[r];
-        for c in r + 1..n {
-            s -= j[r * n + c] * b[c];
-        }
-        b[r] = s / j[r * n + r];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -368,9 +333,18 @@ mod tests {
                 if i / 4 == j / 4 { base } else { 0.05 * base }
             })
             .collect();
-        let dfree: Vec<f64> = (0..n).map(|i| if i == 5 { -3e-5 } else { 8e-5 + 1e-6 * i as f64 }).collect();
+        let dfree: Vec<f64> = (0..n)
+            .map(|i| {
+                if i == 5 {
+                    -3e-5
+                } else {
+                    8e-5 + 1e-6 * i as f64
+                }
+            })
+            .collect();
         let solve = |block: usize| {
-            let mut s = ContactSolver::new(vec![5.13e-8; n], vec![7e4; n], 1e-12, 50).with_block(block);
+            let mut s =
+                ContactSolver::new(vec![5.13e-8; n], vec![7e4; n], 1e-12, 50).with_block(block);
             let mut p = vec![7e4; n];
             let it = s.solve(&mut p, &dfree, &a, 0.0, 0).unwrap();
             (p, it)

@@ -8,7 +8,7 @@
 
 use crate::basis::Shape;
 use crate::layers::{Derivative, Layer, gram_blocks_over};
-use crate::sparse::Assembler;
+use crate::linalg::sparse::Assembler;
 
 /// Adds `w`·∫ n·nᵀ dx over `range` of a continuous connection (b = None: to the ground).
 pub fn add_continuous(

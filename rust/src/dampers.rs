@@ -17,7 +17,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::Shape;
-use crate::sparse::{Assembler, CsrMatrix};
+use crate::linalg::sparse::{Assembler, CsrMatrix};
 
 /// Which element sits in which branch.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default, Hash)]
@@ -90,12 +90,28 @@ impl DamperParams {
         let (k, c, b) = (self.stiffness, self.damping, self.inertance);
         let out = match self.kind {
             DamperKind::Tid | DamperKind::Tmd => [
-                Branch { stiffness: k, damping: c, inertance: 0.0 },
-                Branch { stiffness: 0.0, damping: 0.0, inertance: b },
+                Branch {
+                    stiffness: k,
+                    damping: c,
+                    inertance: 0.0,
+                },
+                Branch {
+                    stiffness: 0.0,
+                    damping: 0.0,
+                    inertance: b,
+                },
             ],
             DamperKind::Tvmd => [
-                Branch { stiffness: k, damping: 0.0, inertance: 0.0 },
-                Branch { stiffness: 0.0, damping: c, inertance: b },
+                Branch {
+                    stiffness: k,
+                    damping: 0.0,
+                    inertance: 0.0,
+                },
+                Branch {
+                    stiffness: 0.0,
+                    damping: c,
+                    inertance: b,
+                },
             ],
         };
         debug_assert!(out[0].inertance == 0.0 && out[1].stiffness == 0.0);
@@ -142,7 +158,11 @@ impl BranchState {
         } else {
             0.0
         };
-        *self = Self { x: x1, v: v1, a: a1 };
+        *self = Self {
+            x: x1,
+            v: v1,
+            a: a1,
+        };
     }
 }
 
@@ -195,10 +215,26 @@ mod tests {
     fn a_branch_step_converges_to_its_force_law_at_second_order() {
         let (f0, w) = (1e3, 50.0);
         for br in [
-            Branch { stiffness: 3.0e5, damping: 4e3, inertance: 2.0 },
-            Branch { stiffness: 3.0e5, damping: 4e3, inertance: 0.0 },
-            Branch { stiffness: 0.0, damping: 4e3, inertance: 2.0 },
-            Branch { stiffness: 0.0, damping: 0.0, inertance: 2.0 },
+            Branch {
+                stiffness: 3.0e5,
+                damping: 4e3,
+                inertance: 2.0,
+            },
+            Branch {
+                stiffness: 3.0e5,
+                damping: 4e3,
+                inertance: 0.0,
+            },
+            Branch {
+                stiffness: 0.0,
+                damping: 4e3,
+                inertance: 2.0,
+            },
+            Branch {
+                stiffness: 0.0,
+                damping: 0.0,
+                inertance: 2.0,
+            },
         ] {
             // X = F₀/(d_re + i·d_im); x = |X|·sin(ωt − φ).
             let (d_re, d_im) = (br.stiffness - br.inertance * w * w, w * br.damping);
@@ -229,7 +265,12 @@ mod tests {
     #[test]
     fn each_kind_keeps_the_inerter_below_and_the_spring_above() {
         for kind in [DamperKind::Tid, DamperKind::Tvmd, DamperKind::Tmd] {
-            let p = DamperParams { kind, stiffness: 1.0, damping: 2.0, inertance: 3.0 };
+            let p = DamperParams {
+                kind,
+                stiffness: 1.0,
+                damping: 2.0,
+                inertance: 3.0,
+            };
             let [up, lo] = p.branches();
             assert_eq!((up.stiffness, lo.inertance), (1.0, 3.0));
             assert_eq!(up.damping + lo.damping, 2.0);

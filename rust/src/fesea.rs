@@ -464,8 +464,8 @@ impl FeSea {
 mod tests {
     use super::*;
     use crate::config::Method;
+    use crate::linalg::sparse::CsrMatrix;
     use crate::presets;
-    use crate::sparse::CsrMatrix;
 
     fn paper_hybrid(coupling: FeSeaCoupling) -> (Config, Layer) {
         let mut cfg = presets::paper();
@@ -741,8 +741,10 @@ mod tests {
                 cfg.discretisation.omega_r = Some(2.0 * PI * f);
                 let st = crate::structure::Structure::build(&cfg).unwrap();
                 assert!(st.fesea.is_some());
-                crate::sparse::Ldlt::new(&st.k).unwrap_or_else(|e| panic!("K at {f} Hz: {e}"));
-                crate::sparse::Ldlt::new(&st.m).unwrap_or_else(|e| panic!("M at {f} Hz: {e}"));
+                crate::linalg::sparse::Ldlt::new(&st.k)
+                    .unwrap_or_else(|e| panic!("K at {f} Hz: {e}"));
+                crate::linalg::sparse::Ldlt::new(&st.m)
+                    .unwrap_or_else(|e| panic!("M at {f} Hz: {e}"));
             }
         }
     }

@@ -32,11 +32,11 @@
 //! term κ·w·wᵀ on A, w = N_upper − N_lower, κ = α_rα_s/(α_r + α_s), which the Woodbury identity
 //! A⁻¹ = A₀⁻¹ − Y·S⁻¹·Yᵀ (Y = A₀⁻¹W, S = K⁻¹ + WᵀA₀⁻¹W) applies with precomputed Y.
 
-use crate::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::basis::Shape;
 use crate::dampers::{Attachment, DamperParams};
 use crate::error::Result;
-use crate::sparse::{CsrMatrix, Ldlt, SymOperator};
+use crate::linalg::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
+use crate::linalg::sparse::{CsrMatrix, Ldlt, SymOperator};
 
 /// Port columns processed together (one car: four wheelsets).
 pub const GW: usize = 4;
@@ -273,7 +273,7 @@ impl ShapeSet {
         }
         crate::wide!(<W> (cols: &[f64] = &self.cols, len: usize = self.idx.len(), buf: &[f64] = &self.buf, out: &mut [f64] = out) {
             for (a, o) in out.chunks_exact_mut(W).enumerate() {
-                o.copy_from_slice(&crate::simd::dot_lanes::<W>(&cols[a * len..(a + 1) * len], buf));
+                o.copy_from_slice(&crate::linalg::simd::dot_lanes::<W>(&cols[a * len..(a + 1) * len], buf));
             }
         });
     }
@@ -285,7 +285,7 @@ impl ShapeSet {
         crate::wide!(<W> (buf: &mut [f64] = &mut self.buf, cols: &[f64] = &self.cols, len: usize = len, w: &[f64] = w) {
             for (a, wa) in w.chunks_exact(W).enumerate() {
                 let wa: &[f64; W] = wa.try_into().expect("W weights");
-                crate::simd::axpy_lanes::<W>(buf, &cols[a * len..(a + 1) * len], wa);
+                crate::linalg::simd::axpy_lanes::<W>(buf, &cols[a * len..(a + 1) * len], wa);
             }
         });
         for (b, &i) in self.buf.chunks_exact(W).zip(&self.idx) {
@@ -375,42 +375,12 @@ impl Attached {
             self.b[q] = lo.inertance;
             sm[i * nt + i] += 1.0 / (ar * as_ / (ar + as_));
         }
-        let inv = invert_spd(&sm, nt)?;
+        let inv = crate::linalg::dense::inverse_spd(&sm, nt).ok_or_else(|| {
+            crate::error::VtbError::Solver("damper coupling matrix is not positive definite".into())
+        })?;
         self.s_inv[lane * nt * nt..(lane + 1) * nt * nt].copy_from_slice(&inv);
         Ok(())
     }
-}
-
-/// Inverse of a small symmetric positive definite matrix (Gauss–Jordan; once per run).
-fn invert_spd(a: &[f64], n: usize) -> Result<Vec<f64>> {
-    let mut m = a.to_vec();
-    let mut inv: Vec<f64> = (0..n * n)
-        .map(|k| if k % (n + 1) == 0 { 1.0 } else { 0.0 })
-        .collect();
-    for p in 0..n {
-        let d = m[p * n + p];
-        if !(d > 0.0) || !d.is_finite() {
-            return Err(crate::error::VtbError::Solver(
-                "damper coupling matrix is not positive definite".into(),
-            ));
-        }
-        for c in 0..n {
-            m[p * n + c] /= d;
-            inv[p * n + c] /= d;
-        }
-        for r in 0..n {
-            if r != p {
-                let f = m[r * n + p];
-                if f != 0.0 {
-                    for c in 0..n {
-                        m[r * n + c] -= f * m[p * n + c];
-                        inv[r * n + c] -= f * inv[p * n + c];
-                    }
-                }
-            }
-        }
-    }
-    Ok(inv)
 }
 
 /// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F for W jobs in lockstep
@@ -744,7 +714,7 @@ impl<const W: usize> Newmark<W> {
             } else {
                 crate::wide!(<W> (wz: &mut [f64] = &mut self.att.wz, lw: &[Vec<f64>] = &self.att.lw, z: &[f64] = &self.z[..ns * W]) {
                     for (w, l) in wz.chunks_exact_mut(W).zip(lw) {
-                        w.copy_from_slice(&crate::simd::dot_lanes::<W>(l, z));
+                        w.copy_from_slice(&crate::linalg::simd::dot_lanes::<W>(l, z));
                     }
                 });
             }
@@ -969,7 +939,7 @@ impl<const W: usize> Newmark<W> {
                     let col = &cache[l];
                     let coef: [f64; W] = std::array::from_fn(|lane| h * w[lane][c] * val);
                     crate::wide!(<W> (z: &mut [f64] = &mut self.z[col.start * W..], a: &[f64] = &col.values, v: &[f64; W] = &coef) {
-                        crate::simd::axpy_lanes::<W>(z, a, v)
+                        crate::linalg::simd::axpy_lanes::<W>(z, a, v)
                     });
                 }
             }
@@ -1090,7 +1060,7 @@ impl<const W: usize> Newmark<W> {
 mod tests {
     use super::*;
     use crate::dampers::DamperKind;
-    use crate::sparse::Assembler;
+    use crate::linalg::sparse::Assembler;
 
     fn scalar(v: f64) -> CsrMatrix {
         let mut a = Assembler::new(1);
@@ -1160,73 +1130,74 @@ mod tests {
         let (m0, k0) = (am.finish(), ak.finish());
         let c0 = CsrMatrix::combine(&[(0.3, &m0), (1e-3, &k0)]);
         for kind in [DamperKind::Tid, DamperKind::Tvmd] {
-        let att = Attachment {
-            upper: Shape {
-                start: 1,
-                values: vec![0.3, 0.7],
-            },
-            lower: Shape {
-                start: 4,
-                values: vec![1.0],
-            },
-            node: n,
-            params: DamperParams {
-                kind,
-                stiffness: 50.0,
-                damping: 0.5,
-                inertance: 0.2,
-            },
-        };
-        // Full matrices with the node as DOF n: the damper assembled as a finite element.
-        let [mf, kf, cf] = crate::dampers::stamp(
-            [&m0, &k0, &c0],
-            n + 1,
-            std::slice::from_ref(&att),
-            &[att.params],
-        );
-        let port = Shape {
-            start: 0,
-            values: vec![1.0, 0.5],
-        };
-        let k_contact = 300.0;
-        let run = |nm: &mut Newmark| -> Vec<f64> {
-            nm.observe(&Shape {
-                start: 3,
-                values: vec![1.0],
-            });
-            let u0 = [0.01, -0.02, 0.0, 0.03, 0.0, 0.0];
-            nm.set_state(0, &u0, &[0.0; 6], &[0.0; 6], &kf, &mf);
-            let mut ports = PortBlock::new(nm.n);
-            nm.vector_into(&port, &mut ports.vecs[0]);
-            let f = vec![0.0; nm.n];
-            let mut out = Vec::new();
-            for _ in 0..300 {
-                nm.begin_step(&f, &f);
-                nm.prepare_ports(&mut ports);
-                let free = nm.free_port_disp(&ports)[0][0];
-                let g = nm.port_compliance(&ports, &ports)[0][0][0];
-                let p = -k_contact * free / (1.0 + k_contact * g);
-                nm.add_port_forces(&ports, &[[p, 0.0, 0.0, 0.0]]);
-                nm.end_step();
-                out.push(nm.observed(0, 0).0);
-                out.push(p);
+            let att = Attachment {
+                upper: Shape {
+                    start: 1,
+                    values: vec![0.3, 0.7],
+                },
+                lower: Shape {
+                    start: 4,
+                    values: vec![1.0],
+                },
+                node: n,
+                params: DamperParams {
+                    kind,
+                    stiffness: 50.0,
+                    damping: 0.5,
+                    inertance: 0.2,
+                },
+            };
+            // Full matrices with the node as DOF n: the damper assembled as a finite element.
+            let [mf, kf, cf] = crate::dampers::stamp(
+                [&m0, &k0, &c0],
+                n + 1,
+                std::slice::from_ref(&att),
+                &[att.params],
+            );
+            let port = Shape {
+                start: 0,
+                values: vec![1.0, 0.5],
+            };
+            let k_contact = 300.0;
+            let run = |nm: &mut Newmark| -> Vec<f64> {
+                nm.observe(&Shape {
+                    start: 3,
+                    values: vec![1.0],
+                });
+                let u0 = [0.01, -0.02, 0.0, 0.03, 0.0, 0.0];
+                nm.set_state(0, &u0, &[0.0; 6], &[0.0; 6], &kf, &mf);
+                let mut ports = PortBlock::new(nm.n);
+                nm.vector_into(&port, &mut ports.vecs[0]);
+                let f = vec![0.0; nm.n];
+                let mut out = Vec::new();
+                for _ in 0..300 {
+                    nm.begin_step(&f, &f);
+                    nm.prepare_ports(&mut ports);
+                    let free = nm.free_port_disp(&ports)[0][0];
+                    let g = nm.port_compliance(&ports, &ports)[0][0][0];
+                    let p = -k_contact * free / (1.0 + k_contact * g);
+                    nm.add_port_forces(&ports, &[[p, 0.0, 0.0, 0.0]]);
+                    nm.end_step();
+                    out.push(nm.observed(0, 0).0);
+                    out.push(p);
+                }
+                out
+            };
+            for port_len in [2, 100] {
+                let mut a: Newmark =
+                    Newmark::new(&m0, &c0, &k0, 1e-2, &[0, 1], port_len, None, &[att.clone()])
+                        .unwrap();
+                let mut b: Newmark =
+                    Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
+                let (ra, rb) = (run(&mut a), run(&mut b));
+                let scale = rb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for (x, y) in ra.iter().zip(&rb) {
+                    assert!(
+                        (x - y).abs() < 1e-10 * scale,
+                        "{kind:?}, port_len {port_len}: {x} vs {y}"
+                    );
+                }
             }
-            out
-        };
-        for port_len in [2, 100] {
-            let mut a: Newmark =
-                Newmark::new(&m0, &c0, &k0, 1e-2, &[0, 1], port_len, None, &[att.clone()]).unwrap();
-            let mut b: Newmark =
-                Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
-            let (ra, rb) = (run(&mut a), run(&mut b));
-            let scale = rb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for (x, y) in ra.iter().zip(&rb) {
-                assert!(
-                    (x - y).abs() < 1e-10 * scale,
-                    "{kind:?}, port_len {port_len}: {x} vs {y}"
-                );
-            }
-        }
         }
     }
 }

@@ -11,7 +11,6 @@
 //! println!("{:?}", result.metrics());
 //! ```
 
-pub mod banded;
 pub mod basis;
 pub mod budget;
 pub mod comfort;
@@ -25,14 +24,13 @@ pub mod filter;
 pub mod indices;
 pub mod integrator;
 pub mod layers;
+pub mod linalg;
 pub mod model;
 pub mod plausibility;
 pub mod presets;
 pub mod resolution;
 pub mod results;
-pub mod simd;
 pub mod simulate;
-pub mod sparse;
 pub mod structure;
 pub mod synthesis;
 pub mod trains;

@@ -4,11 +4,11 @@
 use crate::basis::{LayerBasis, ModalBasis, Shape};
 use crate::config::{Config, CouplingKind, GROUND, Method};
 use crate::couplings::{add_continuous, add_discrete};
+use crate::dampers::{Attachment, DamperParams, stamp};
 use crate::error::Result;
 use crate::fesea::FeSea;
-use crate::dampers::{Attachment, DamperParams, stamp};
 use crate::layers::{Derivative, Layer, gram_blocks};
-use crate::sparse::{Assembler, CsrMatrix};
+use crate::linalg::sparse::{Assembler, CsrMatrix};
 
 #[derive(Clone, Debug)]
 pub struct Structure {

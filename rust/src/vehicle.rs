@@ -94,17 +94,21 @@ impl Car {
         z_wheels: &[f64; N_WHEELS],
     ) -> ([f64; N_WHEELS], [f64; N_DOF]) {
         let f = self.gravity(g);
-        let kff: Vec<Vec<f64>> = (0..WHEEL0).map(|i| self.k[i][..WHEEL0].to_vec()).collect();
-        let mut rhs: Vec<f64> = (0..WHEEL0)
+        let kff: Vec<f64> = (0..WHEEL0 * WHEEL0)
+            .map(|q| self.k[q / WHEEL0][q % WHEEL0])
+            .collect();
+        let rhs: Vec<f64> = (0..WHEEL0)
             .map(|i| {
                 f[i] - (0..N_WHEELS)
                     .map(|w| self.k[i][WHEEL0 + w] * z_wheels[w])
                     .sum::<f64>()
             })
             .collect();
-        solve_dense(&kff, &mut rhs);
+        // K_ff (the suspensions with the wheelsets held) is positive definite for validated
+        // springs; parameters of extreme magnitude give NaN, which the run reports.
+        let zf = crate::linalg::dense::solve(&kff, &rhs).unwrap_or_else(|| vec![f64::NAN; WHEEL0]);
         let mut z = [0.0; N_DOF];
-        z[..WHEEL0].copy_from_slice(&rhs);
+        z[..WHEEL0].copy_from_slice(&zf);
         z[WHEEL0..].copy_from_slice(z_wheels);
         let mut p = [0.0; N_WHEELS];
         for (w, pw) in p.iter_mut().enumerate() {
@@ -113,54 +117,6 @@ impl Car {
         }
         (p, z)
     }
-}
-
-/// Solves A·x = b in place by Gaussian elimination with partial pivoting (small dense
-/// systems only). Returns false if A is singular.
-pub fn solve_dense(a: &[Vec<f64>], b: &mut [f64]) -> bool {
-    let n = b.len();
-    let mut m: Vec<Vec<f64>> = a.to_vec();
-    for col in 0..n {
-        let piv = (col..n)
-            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
-            .unwrap();
-        if m[piv][col] == 0.0 {
-            return false;
-        }
-        m.swap(col, piv);
-        b.swap(col, piv);
-        for r in col + 1..n {
-            let f = m[r][col] / m[col][col];
-            if f != 0.0 {
-                for c in col..n {
-                    m[r][c] -= f * m[col][c];
-                }
-                b[r] -= f * b[col];
-            }
-        }
-    }
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|c| m[r][c] * b[c]).sum();
-        b[r] = (b[r] - s) / m[r][r];
-    }
-    true
-}
-
-/// Inverse of a small dense matrix.
-pub fn invert_dense(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = a.len();
-    let mut inv = vec![vec![0.0; n]; n];
-    for j in 0..n {
-        let mut e = vec![0.0; n];
-        e[j] = 1.0;
-        if !solve_dense(a, &mut e) {
-            return None;
-        }
-        for i in 0..n {
-            inv[i][j] = e[i];
-        }
-    }
-    Some(inv)
 }
 
 #[cfg(test)]

@@ -82,7 +82,9 @@ mod tests {
     fn small_systems_against_a_known_solution() {
         let a = [4.0, 1.0, 0.0, 1.0, 3.0, 1.0, 0.0, 1.0, 2.0];
         let x = [1.0, -2.0, 3.0];
-        let b: Vec<f64> = (0..3).map(|i| (0..3).map(|k| a[i * 3 + k] * x[k]).sum()).collect();
+        let b: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|k| a[i * 3 + k] * x[k]).sum())
+            .collect();
         let got = solve(&a, &b).unwrap();
         let mut j = a;
         let mut inplace = b.clone();
@@ -96,7 +98,10 @@ mod tests {
         for i in 0..3 {
             assert!((got[i] - x[i]).abs() < 1e-12 && (inplace[i] - x[i]).abs() < 1e-12);
         }
-        assert!(inverse_spd(&[1.0, 2.0, 2.0, 1.0], 2).is_none(), "indefinite");
+        assert!(
+            inverse_spd(&[1.0, 2.0, 2.0, 1.0], 2).is_none(),
+            "indefinite"
+        );
         assert!(inverse(&[1.0, 2.0, 2.0, 4.0], 2).is_none(), "singular");
     }
 }

@@ -975,7 +975,11 @@ impl Ldlt {
         for (g, v) in zb.chunks_exact(W).enumerate() {
             let minus: [f64; W] = std::array::from_fn(|c| -v[c]);
             for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
-                crate::linalg::simd::axpy_lanes::<W>(&mut zi[s * W..], &self.bval[o..o + l], &minus);
+                crate::linalg::simd::axpy_lanes::<W>(
+                    &mut zi[s * W..],
+                    &self.bval[o..o + l],
+                    &minus,
+                );
             }
         }
         for unit in self.units.iter().rev() {

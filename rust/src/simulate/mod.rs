@@ -4,13 +4,13 @@
 use crate::basis::Shape;
 use crate::config::{Config, InitialState, Profile};
 use crate::contact::{ContactSolver, compression, patch_half_length};
+use crate::dampers::DamperParams;
 use crate::error::{Result, VtbError};
 use crate::fesea::FeSea;
-use crate::dampers::DamperParams;
 use crate::integrator::{GW, Newmark, PortBlock};
+use crate::linalg::sparse::{Assembler, CsrMatrix, Ldlt};
 use crate::model::Model;
 use crate::results::{ContactLoss, Record, RunResult};
-use crate::linalg::sparse::{Assembler, CsrMatrix, Ldlt};
 use crate::synthesis::{self, Reduction};
 use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
 use rayon::prelude::*;

@@ -2,9 +2,7 @@
 //! contact, update, record. `run_lanes` calls them in that order for every step; each phase
 //! works on all lanes of the lockstep group.
 
-use super::{
-    CANCEL_POLL, Control, FINITE_POLL, Simulation, finish, note_contact, poll,
-};
+use super::{CANCEL_POLL, Control, FINITE_POLL, Simulation, finish, note_contact, poll};
 use crate::error::{Result, VtbError};
 use crate::integrator::GW;
 use crate::results::RunResult;
@@ -20,7 +18,15 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let nw = self.p.len() / W;
         let mut res: Vec<RunResult> = (0..W)
             .map(|_| {
-                RunResult::new(cfg, st, self.n_steps, &self.points, self.cars.len(), nw, self.record)
+                RunResult::new(
+                    cfg,
+                    st,
+                    self.n_steps,
+                    &self.points,
+                    self.cars.len(),
+                    nw,
+                    self.record,
+                )
             })
             .collect();
         self.record_step(&mut res, 0);

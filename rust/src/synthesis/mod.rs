@@ -31,7 +31,7 @@ use std::sync::{Arc, Mutex};
 
 /// Mode arrays are padded with inert modes (ψ = 0, λ = 0, w = 0) to a multiple of this, the
 /// partial sums of every dot product over the modes.
-pub(crate) const PAD: usize = crate::simd::PARTIAL_SUMS;
+pub(crate) const PAD: usize = crate::linalg::simd::PARTIAL_SUMS;
 
 /// The reduction of one structure (see the module documentation).
 #[derive(Clone, Debug)]

@@ -417,7 +417,11 @@ impl<'a, const W: usize> Run<'a, W> {
                     .map(|p| {
                         let branches = p.branches();
                         DamperLane {
-                            kappa: 1.0 / branches.iter().map(|b| 1.0 / b.step_stiffness(dt)).sum::<f64>(),
+                            kappa: 1.0
+                                / branches
+                                    .iter()
+                                    .map(|b| 1.0 / b.step_stiffness(dt))
+                                    .sum::<f64>(),
                             branches,
                             ..Default::default()
                         }
