@@ -53,6 +53,15 @@ def test_reproduce_quick(tmp_path):
     gaps = text.split("## The gaps between vtb and the article, and the evidence")[1].split("## Run times")[0]
     for gap in ("Rail displacement", "Slab acceleration", "Rail r.m.s. and stabilisation time", "The best sweep case", "The MOGA optimum", "Car body"):
         assert f"**{gap}" in gaps, gap
+    # A designs journal stamped for another configuration (an earlier version): --force sets it
+    # aside and reruns, reusing the sweep journal, which still matches.
+    journal = next(out.glob("optimisation_warm_*.designs.jsonl"))
+    identity, *rest = journal.read_text().splitlines()
+    journal.write_text("\n".join([identity.replace('"config": "', '"config": "0'), *rest]) + "\n")
+    sweep = (out / "sweep.csv").read_text()
+    assert cli.main(["reproduce", "--out", str(out), "--quick", "--no-progress", "--force"]) == 0
+    assert journal.with_name(journal.name + ".stale").exists() and journal.exists()
+    assert (out / "sweep.csv").read_text() == sweep
 
 
 def test_simulate_says_what_it_runs_and_how_it_relates_to_the_article():

@@ -63,6 +63,8 @@ def run_setting_aside_stale(run, force: bool):
     """``run()``; with ``force``, each journal or checkpoint it refuses as written for another
     configuration is renamed ``<name>.stale`` (noted on stderr) and ``run()`` called again. The
     journals and checkpoints that match are still reused, so nothing valid is repeated."""
+    import ast
+
     from .errors import ConfigError
 
     set_aside = set()
@@ -70,7 +72,10 @@ def run_setting_aside_stale(run, force: bool):
         try:
             return run()
         except ConfigError as e:
-            path = Path(str(e.value)) if e.value is not None else None
+            try:  # the value is held as its repr
+                path = Path(str(ast.literal_eval(e.value)))
+            except (ValueError, SyntaxError):
+                path = None
             stale = force and e.reason is not None and any(r in e.reason for r in STALE_REASONS)
             if not stale or path is None or not path.is_file() or path in set_aside:
                 raise
