@@ -29,7 +29,10 @@ def bump(x):
     return -0.5 * BUMP_HEIGHT * (1.0 - np.cos(2.0 * np.pi * s))
 
 
-def _car_equations(v, g, x_front):
+def _car_equations(v, g, x_front, under=None, speed=80.0):
+    """The car's equations; ``under(x)``: the irregularity under its four wheels at their
+    positions x (m, dip positive), default the rail bump."""
+    under = under or bump
     m = np.array([v.m_c, v.j_c, v.m_t, v.j_t, v.m_t, v.j_t] + [v.m_w] * 4)
     bogie = [v.l_c, -v.l_c]  # bogie offsets from the car centre (front first)
     wheel = [(0, v.l_t), (0, -v.l_t), (1, v.l_t), (1, -v.l_t)]  # (bogie, offset) per wheelset
@@ -53,7 +56,7 @@ def _car_equations(v, g, x_front):
             f[6 + j] -= q
             f[2 + 2 * i] += q
             f[3 + 2 * i] += a * q
-        delta = z[6:] - bump(x_wheels + 80.0 * t)
+        delta = z[6:] - under(x_wheels + speed * t)
         p = np.where(delta > 0, np.maximum(delta, 0.0) / G, 0.0) ** 1.5
         f[6:] -= v.rails * p
         return f, p
@@ -97,3 +100,44 @@ def test_each_car_of_a_consist_matches_an_independent_solution(consist, car):
     for k in (0, 2, 4, 6, 7, 8, 9):
         want = z[:, k] - z0[k]
         np.testing.assert_allclose(r.vehicle_disp[:, car, k], want, atol=2e-3 * np.abs(want).max())
+
+
+def test_a_wheel_flat_matches_an_independent_solution():
+    """A 50 mm rounded flat (depth L²/16R, Wu & Thompson's worn shape) on the second wheelset
+    of one car at 80 m/s on the rigid track: three impacts, one per wheel revolution, each
+    unloading the wheel and striking it back. The flat is coded here from its formula, under
+    that wheel only, and the car integrated by DOP853; vtb's run (the flat sampled on its
+    grid and carried as that wheel's tread row) matches it force by force: the impact peak
+    (1.53 × the static load) within 0.1 %, every wheel's force within 0.5 % of the static load."""
+    length, x_flat, flat_wheel = 0.05, -199.0, 1
+    cfg = vtb.paper_config()
+    v = cfg.vehicles[0]
+    v.x_front = X_FRONT
+    cfg.irregularity = vtb.Irregularity(kind="wheel_flat", wheel=flat_wheel, length=length, position=x_flat)
+    cfg.solver.fade_in = 0.0
+    cfg.solver.dt = 1e-5
+    cfg.solver.t_end = 0.1
+    r = vtb.simulate(cfg, progress=False)
+    radius = v.wheel_radius
+    depth = length**2 / (16 * radius)
+
+    def under(x):
+        u = np.mod(x - x_flat + 0.5 * length, 2 * np.pi * radius)
+        flat = np.where(u <= length, 0.5 * depth * (1 - np.cos(2 * np.pi * u / length)), 0.0)
+        return np.where(np.arange(4) == flat_wheel, flat, 0.0)
+
+    rhs, forces, z0 = _car_equations(v, cfg.solver.gravity, v.x_front, under=under, speed=cfg.speed)
+    sol = solve_ivp(rhs, (0.0, 0.1), np.concatenate([z0, np.zeros(10)]), method="DOP853",
+                    rtol=1e-10, atol=1e-13, t_eval=r.t, max_step=2e-5)
+    assert sol.success
+    p = np.array([forces(t, zi, zdi)[1] for t, zi, zdi in zip(sol.t, sol.y[:10].T, sol.y[10:].T)])
+    got = r.contact_force[:, :4]
+    static = (v.m_c / 4 + v.m_t / 2 + v.m_w) * cfg.solver.gravity / v.rails
+    # Three revolutions' impacts: the flat wheel loses contact and is struck back well above
+    # its static load, the other wheels barely notice.
+    assert np.sum(np.diff((p[:, flat_wheel] == 0).astype(int)) == 1) == 3
+    assert p[:, flat_wheel].max() > 1.5 * static
+    assert got[:, flat_wheel].max() == pytest.approx(p[:, flat_wheel].max(), rel=1e-3)
+    # Measured: 0.14 % of the static load at worst, the same at Δt = 5e-6 s (the flat's
+    # 0.5 mm sampling, not the step).
+    np.testing.assert_allclose(got, p, atol=5e-3 * static)
