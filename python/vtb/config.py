@@ -230,12 +230,16 @@ class DamperGroup(StrictFields):
         """The dampers' positions (m): ``positions``, or the pattern ``x0 + i·spacing``."""
         if self.positions is not None:
             return np.asarray(self.positions, dtype=float)
-        return self.x0 + (self.spacing or 0.0) * np.arange(self.count or 0)
+        if self.count is None or self.x0 is None:  # incomplete: validate() names the field
+            return np.zeros(0)
+        return self.x0 + (self.spacing or 0.0) * np.arange(self.count)
 
     def placement(self) -> str:
         """Where the dampers are: ``"x = x0 m + i·spacing m"`` or the list of positions."""
         if self.positions is not None:
             return "x = " + ", ".join(f"{x:g}" for x in self.positions) + " m"
+        if self.x0 is None:
+            return "no positions"
         return f"x = {self.x0:g} m + i·{self.spacing or 0.0:g} m"
 
     def describe(self) -> str:
