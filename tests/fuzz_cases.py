@@ -112,6 +112,8 @@ def make_case(rng: random.Random):
     """(label, thunk): calling the thunk runs the case through the public API."""
     kind = rng.choices(["values", "structure", "attribute", "toml"], weights=[5, 2, 2, 1])[0]
     base = small_config()
+    # A second damper group of another kind at explicit positions: its fields are fuzzed too.
+    base.dampers = [vtb.DamperGroup(kind="tvmd", inertance=3.0, stiffness=1e8, damping=2e3, positions=[40.0, 120.0])]
     if kind == "values":
         d = base.to_dict()
         leaves = sorted(_leaves(d), key=str)
