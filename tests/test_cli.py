@@ -123,7 +123,7 @@ def test_force_sets_stale_journals_aside_and_keeps_the_rest(tmp_path):
     renamed *.stale and the run retried (matching journals stay); without it, or for a
     journal in use by another process, the refusal stands."""
     from vtb.cli import run_setting_aside_stale
-    from vtb.errors import config_error
+    from vtb.errors import config_error, stale_file_error
 
     stale, kept = tmp_path / "opt.npz.designs.jsonl", tmp_path / "sweep.csv"
     stale.write_text("old\n")
@@ -133,7 +133,7 @@ def test_force_sets_stale_journals_aside_and_keeps_the_rest(tmp_path):
     def run():
         calls.append(1)
         if stale.exists():
-            raise config_error("checkpoint", str(stale), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
+            raise stale_file_error("checkpoint", stale, "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
         return "report"
 
     with pytest.raises(vtb.ConfigError, match="another optimisation"):
@@ -149,3 +149,13 @@ def test_force_sets_stale_journals_aside_and_keeps_the_rest(tmp_path):
     with pytest.raises(vtb.ConfigError, match="in use"):
         run_setting_aside_stale(busy, force=True)
     assert kept.exists()
+
+
+def test_a_stale_file_error_pickles_with_its_path():
+    import pickle
+
+    from vtb.errors import stale_file_error
+
+    e = pickle.loads(pickle.dumps(stale_file_error("checkpoint", "/x/opt.npz", "belongs to another run")))
+    assert isinstance(e, vtb.StaleFileError) and isinstance(e, vtb.ConfigError)
+    assert (e.path, e.field, e.reason) == ("/x/opt.npz", "checkpoint", "belongs to another run")

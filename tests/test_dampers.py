@@ -102,7 +102,7 @@ def test_groups_of_several_kinds_and_explicit_positions_match_the_finite_element
     """The article's TIDs plus a TVMD group at explicit positions and a TMD on the bridge,
     on the default (synthesis) model against the finite elements within the tolerances of
     the single-kind check (tests/test_synthesis.py)."""
-    from test_synthesis import fem_of, one_span
+    from test_synthesis import assert_matches_the_finite_elements, one_span
 
     c = one_span()
     c.tids = vtb.tids_around(c, inertance=3.0, stiffness=1.46e8, damping=1e3, count=2, x=12.8)
@@ -111,14 +111,7 @@ def test_groups_of_several_kinds_and_explicit_positions_match_the_finite_element
         vtb.DamperGroup(kind="tmd", inertance=500.0, stiffness=500.0 * (2 * math.pi * 8.0) ** 2, damping=400.0,
                         positions=[16.0], upper=c.structure.layers[-1].name, lower="ground"),
     ]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", vtb.ResolutionWarning)
-        ref = vtb.simulate(fem_of(c)).metrics()
-    mine = vtb.simulate(c).metrics()
-    for k in ("rail_disp_max", "slab_disp_max", "contact_force_max"):
-        assert mine[k] == pytest.approx(ref[k], rel=0.01), k
-    for k in ("rail_acc_max", "rail_acc_rms", "slab_acc_max", "slab_acc_rms"):
-        assert mine[k] == pytest.approx(ref[k], rel=0.03), k
+    assert_matches_the_finite_elements(c)
 
 
 def test_a_group_is_refused_naming_its_path():

@@ -27,7 +27,7 @@ from .config import (
     TIDs,
     Vehicle,
 )
-from .errors import ConfigError, ConvergenceError, SolverError, VtbError
+from .errors import ConfigError, ConvergenceError, SolverError, StaleFileError, VtbError
 from .fesea import FeSeaReport, fesea_report
 from .irregularity import Irregularity, IrregularityWarning
 from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
@@ -49,7 +49,7 @@ from .config import plausible_ranges
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
     "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "Irregularity", "IrregularityWarning", "irregularity",
-    "ConfigError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
+    "ConfigError", "StaleFileError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",

@@ -53,31 +53,21 @@ def check_out_file(path, option: str, force: bool) -> None:
         raise config_error(option, str(path), "exists: pass --force to overwrite")
 
 
-#: How a journal or checkpoint says it was written for another configuration (an earlier
-#: version of vtb, other settings): what ``--force`` sets aside. A journal in use by another
-#: process is never set aside.
-STALE_REASONS = ("holds the designs of another optimisation", "belongs to another run", "holds a study of another configuration")
-
-
 def run_setting_aside_stale(run, force: bool):
     """``run()``; with ``force``, each journal or checkpoint it refuses as written for another
-    configuration is renamed ``<name>.stale`` (noted on stderr) and ``run()`` called again. The
-    journals and checkpoints that match are still reused, so nothing valid is repeated."""
-    import ast
-
-    from .errors import ConfigError
+    configuration (:class:`~vtb.errors.StaleFileError`) is renamed ``<name>.stale`` (noted on
+    stderr) and ``run()`` called again. The journals and checkpoints that match are still
+    reused, so nothing valid is repeated; a journal in use by another process is a plain
+    :class:`~vtb.errors.ConfigError` and never set aside."""
+    from .errors import StaleFileError
 
     set_aside = set()
     while True:
         try:
             return run()
-        except ConfigError as e:
-            try:  # the value is held as its repr
-                path = Path(str(ast.literal_eval(e.value)))
-            except (ValueError, SyntaxError):
-                path = None
-            stale = force and e.reason is not None and any(r in e.reason for r in STALE_REASONS)
-            if not stale or path is None or not path.is_file() or path in set_aside:
+        except StaleFileError as e:
+            path = Path(e.path)
+            if not force or not path.is_file() or path in set_aside:
                 raise
             path.replace(path.with_name(path.name + ".stale"))
             set_aside.add(path)

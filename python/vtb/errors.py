@@ -28,9 +28,27 @@ class ConfigError(VtbError, ValueError):
         return (type(self), (self.args[0], self.field, self.value, self.reason))
 
 
+class StaleFileError(ConfigError):
+    """A study's journal or checkpoint was written for another configuration (another
+    version of vtb, other settings). ``path`` is the file. ``--force`` on ``vtb reproduce`` and
+    ``vtb study robust`` sets such files aside."""
+
+    def __init__(self, message: str, field: str | None = None, value: str | None = None, reason: str | None = None, path: str | None = None):
+        super().__init__(message, field, value, reason)
+        self.path = path
+
+    def __reduce__(self):
+        return (type(self), (self.args[0], self.field, self.value, self.reason, self.path))
+
+
 def config_error(field: str, value, reason: str) -> ConfigError:
     """A :class:`ConfigError` with the message format of the Rust core."""
     return ConfigError(f"invalid config field `{field}` = {value!r}: {reason}", field, repr(value), reason)
+
+
+def stale_file_error(field: str, path, reason: str) -> StaleFileError:
+    """A :class:`StaleFileError` for the file ``path`` given as ``field``."""
+    return StaleFileError(f"invalid config field `{field}` = {str(path)!r}: {reason}", field, repr(str(path)), reason, str(path))
 
 
 class ConvergenceError(VtbError, RuntimeError):

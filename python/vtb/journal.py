@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Optional
 
 from .config import Config
-from .errors import ConfigError, config_error
+from .errors import ConfigError, config_error, stale_file_error
 from .moga import write_atomically
 
 FORMAT = 1
@@ -185,7 +185,7 @@ def open_rows(journal: Path, config: Config, layout: Layout) -> dict:
         write_atomically(journal, lambda f: f.write((first + csv_text([], layout.columns, header=True)).encode()))
         return {}
     if config_stamp(stamped) != stamp:
-        raise config_error("out", str(journal), "line 1: holds a study of another configuration; choose another path")
+        raise stale_file_error("out", journal, "line 1: holds a study of another configuration; choose another path")
     return rows
 
 

@@ -82,7 +82,7 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-from .errors import config_error
+from .errors import config_error, stale_file_error
 
 __all__ = [
     "Problem", "Population", "Generation", "Result", "minimize", "non_dominated_sort",
@@ -1080,7 +1080,7 @@ def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tupl
     saved = header.get("identity")
     if saved != identity:
         differ = sorted(k for k in identity if not isinstance(saved, dict) or saved.get(k) != identity[k])
-        raise config_error("checkpoint", str(path), f"belongs to another run (it differs in {', '.join(differ) or 'its fields'}); delete it or choose another path")
+        raise stale_file_error("checkpoint", path, f"belongs to another run (it differs in {', '.join(differ) or 'its fields'}); delete it or choose another path")
     n, p = identity["pop_size"], algo.space.problem
     shapes = dict(Z=(n, p.n_var), X=(n, p.n_var), F=(n, p.n_obj), G=(n, p.n_constr), CV=(n,), rank=(n,), crowd=(n,))
     try:

@@ -32,7 +32,7 @@ import numpy as np
 
 from . import moga
 from .config import Config
-from .errors import VtbError, config_error
+from .errors import VtbError, config_error, stale_file_error
 from .presets import tids_around
 from .scaleout import run_cases
 from .simulate import Result, simulate
@@ -87,7 +87,7 @@ class DesignJournal:
         if self.path.exists() and self.path.stat().st_size:
             lines = self.path.read_text().splitlines()
             if json.loads(lines[0]) != json.loads(json.dumps(identity)):
-                raise config_error("checkpoint", str(self.path), "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
+                raise stale_file_error("checkpoint", self.path, "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
             for line in lines[1:]:
                 try:
                     d = json.loads(line)

@@ -933,29 +933,12 @@ impl Config {
         }
         for (i, c) in s.couplings.iter().enumerate() {
             let p = format!("structure.couplings[{i}]");
-            let upper = self.layer_index(&c.upper).ok_or_else(|| {
-                VtbError::config(
-                    format!("{p}.upper"),
-                    format!("{:?}", c.upper),
-                    "no layer of that name",
-                )
-            })?;
-            if c.lower != GROUND {
-                let lower = self.layer_index(&c.lower).ok_or_else(|| {
-                    VtbError::config(
-                        format!("{p}.lower"),
-                        format!("{:?}", c.lower),
-                        "no layer of that name (or \"ground\")",
-                    )
-                })?;
-                if lower == upper {
-                    return Err(VtbError::config(
-                        format!("{p}.lower"),
-                        format!("{:?}", c.lower),
-                        "a layer cannot be coupled to itself",
-                    ));
-                }
-            }
+            let (upper, _) = self.layer_pair(
+                &p,
+                &c.upper,
+                &c.lower,
+                "a layer cannot be coupled to itself",
+            )?;
             c.validate(&p)?;
             match c.kind {
                 CouplingKind::Discrete => {
@@ -1402,38 +1385,51 @@ impl Config {
             .collect()
     }
 
-    /// A group's layers exist, differ, and hold every one of its dampers.
-    fn dampers_on_layers(&self, path: &str, g: &DamperGroup) -> Result<()> {
-        let upper = self.layer_index(&g.upper).ok_or_else(|| {
+    /// The layers `path.upper` and `path.lower` name (`None`: the ground), refused when one does
+    /// not exist or both are the same (`same`: the reason given).
+    fn layer_pair(
+        &self,
+        path: &str,
+        upper: &str,
+        lower: &str,
+        same: &str,
+    ) -> Result<(usize, Option<usize>)> {
+        let u = self.layer_index(upper).ok_or_else(|| {
             VtbError::config(
                 format!("{path}.upper"),
-                format!("{:?}", g.upper),
+                format!("{upper:?}"),
                 "no layer of that name",
             )
         })?;
-        let mut layers = vec![upper];
-        if g.lower != GROUND {
-            let lower = self.layer_index(&g.lower).ok_or_else(|| {
-                VtbError::config(
-                    format!("{path}.lower"),
-                    format!("{:?}", g.lower),
-                    "no layer of that name (or \"ground\")",
-                )
-            })?;
-            if upper == lower {
-                return Err(VtbError::config(
-                    format!("{path}.lower"),
-                    format!("{:?}", g.lower),
-                    format!("must differ from {path}.upper"),
-                ));
-            }
-            layers.push(lower);
+        if lower == GROUND {
+            return Ok((u, None));
         }
+        let l = self.layer_index(lower).ok_or_else(|| {
+            VtbError::config(
+                format!("{path}.lower"),
+                format!("{lower:?}"),
+                "no layer of that name (or \"ground\")",
+            )
+        })?;
+        if l == u {
+            return Err(VtbError::config(
+                format!("{path}.lower"),
+                format!("{lower:?}"),
+                same,
+            ));
+        }
+        Ok((u, Some(l)))
+    }
+
+    /// A group's layers exist, differ, and hold every one of its dampers.
+    fn dampers_on_layers(&self, path: &str, g: &DamperGroup) -> Result<()> {
+        let same = format!("must differ from {path}.upper");
+        let (upper, lower) = self.layer_pair(path, &g.upper, &g.lower, &same)?;
         let field = match g.positions {
             Some(_) => format!("{path}.positions"),
             None => format!("{path}.x0"),
         };
-        for i in layers {
+        for i in std::iter::once(upper).chain(lower) {
             for x in g.locations() {
                 self.on_layer(&field, x, i)?;
             }
