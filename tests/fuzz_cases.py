@@ -114,6 +114,8 @@ def make_case(rng: random.Random):
     base = small_config()
     # A second damper group of another kind at explicit positions: its fields are fuzzed too.
     base.dampers = [vtb.DamperGroup(kind="tvmd", inertance=3.0, stiffness=1e8, damping=2e3, positions=[40.0, 120.0])]
+    if rng.random() < 0.2:  # the other vehicle model, its fields fuzzed alike
+        base.vehicles = [vtb.Vehicle.quarter_car(13_600.0, 2_400.0, 1e6, 4e4, x_front=base.vehicles[0].x_front)]
     if kind == "values":
         d = base.to_dict()
         leaves = sorted(_leaves(d), key=str)

@@ -30,10 +30,19 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "damper_kinds.py", "defect_impacts.py", "receptance_check.py", "speed_study.py",
+    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "damper_kinds.py", "defect_impacts.py", "quarter_car.py", "receptance_check.py", "speed_study.py",
                        "train_passage.py", "viaduct_passage.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
+
+
+def test_quarter_car_example():
+    """The moving force at 40 m/s (speed parameter 0.1) gives Frýba's published 1.097; the
+    quarter car of the same weight stays within 1 % of it on this stiff girder."""
+    rows = [[float(v) for v in line.split("|")] for line in _run("quarter_car.py").splitlines()[1:]]
+    assert [r[0] for r in rows] == [40.0, 60.0, 80.0, 100.0, 120.0]
+    assert rows[0][1] == pytest.approx(1.097, rel=0.01)
+    assert all(r[2] == pytest.approx(r[1], rel=0.01) and r[3] > 0 for r in rows)
 
 
 def test_speed_study_example(tmp_path):

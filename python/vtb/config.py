@@ -27,6 +27,7 @@ import numpy as np
 
 from .errors import config_error
 from .irregularity import Irregularity
+from . import _core
 from .schema import StrictFields
 from .schema import default as _default
 from .schema import documented
@@ -136,9 +137,11 @@ class Discretisation(StrictFields):
 @documented("VehicleConfig")
 @dataclass
 class Vehicle(StrictFields):
-    """Zhai's 10-DOF car. Secondary suspension per bogie, primary per wheelset (both sides
-    lumped). The modelled top layer is one of ``rails`` identical rails, so it carries
-    1/``rails`` of every axle load."""
+    """A vehicle (docs/vehicles.md). ``model="car"``: Zhai's 10-DOF car, secondary suspension
+    per bogie, primary per wheelset (both sides lumped). ``model="quarter_car"``: a sprung mass
+    ``m_c`` on ``k_p`` ∥ ``c_p`` over one wheel ``m_w`` (build it with :meth:`quarter_car`).
+    The modelled top layer is one of ``rails`` identical rails, so it carries 1/``rails`` of
+    every axle load."""
 
     m_c: float
     j_c: float
@@ -157,10 +160,31 @@ class Vehicle(StrictFields):
     rails: int = _default("VehicleConfig", "rails")
     contact_patch: bool = _default("VehicleConfig", "contact_patch")
     rail_crown_radius: float = _default("VehicleConfig", "rail_crown_radius")
+    model: Literal["car", "quarter_car"] = _default("VehicleConfig", "model")
+
+    @classmethod
+    def quarter_car(cls, sprung_mass: float, wheel_mass: float, stiffness: float, damping: float,
+                    x_front: float, wheel_radius: float = 0.46, **kw) -> "Vehicle":
+        """A quarter car: ``sprung_mass`` (kg) on a spring ``stiffness`` (N/m) ∥ dashpot
+        ``damping`` (N·s/m) over one wheel of ``wheel_mass`` (kg) at ``x_front`` (m) at t = 0;
+        ``kw`` sets the contact fields (``rails``, ``contact_patch``, ...)."""
+        zero = dict.fromkeys(("j_c", "m_t", "j_t", "k_s", "c_s", "l_c", "l_t"), 0.0)
+        return cls(m_c=sprung_mass, m_w=wheel_mass, k_p=stiffness, c_p=damping, x_front=x_front,
+                   wheel_radius=wheel_radius, model="quarter_car", **zero, **kw)
+
+    @property
+    def dofs(self) -> tuple:
+        """Names of the model's DOFs, in the order of ``Result.vehicle_disp``."""
+        return tuple(_core.vehicle_models()[self.model][0])
+
+    @property
+    def n_wheels(self) -> int:
+        """Wheels of the model (the columns of ``Result.contact_force`` per vehicle)."""
+        return _core.vehicle_models()[self.model][1]
 
     @property
     def length(self) -> float:
-        """Distance from the leading to the trailing wheelset (m)."""
+        """Distance from the leading to the trailing wheel (m)."""
         return 2.0 * (self.l_c + self.l_t)
 
 
@@ -203,6 +227,7 @@ class Output(StrictFields):
     band_limit: Optional[float] = _default("OutputConfig", "band_limit")
     indices: Optional[list] = _default("OutputConfig", "indices")
     deck_band: float = _default("OutputConfig", "deck_band")
+    band_levels: list = _default("OutputConfig", "band_levels")
 
 
 @documented("DamperGroup")

@@ -52,7 +52,7 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
         raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")
     vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
-    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), n_wheels=WHEELS_PER_CAR * len(vehicles))
+    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), n_wheels=sum(v.n_wheels for v in vehicles))
     _warn_band_limit(cfg)
     return text, irregularity_profile(cfg)
 
@@ -91,7 +91,7 @@ def irregularity_profile(cfg: Config) -> SampledProfile:
     if L is None or L <= 0:
         return SampledProfile(0.0, 1.0, np.zeros(0), [])
     budget = _real(getattr(cfg.solver, "memory_budget", None))
-    radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(WHEELS_PER_CAR)]
+    radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(v.n_wheels)]
     # Wheels may start before the structure and end beyond it (on a rigid track).
     try:
         travel = _core.wheel_travel(cfg.to_core_json())
@@ -109,13 +109,6 @@ def _profile_args(profile: SampledProfile) -> tuple:
     return x0, dx, values if values.size else None, treads
 
 
-#: Wheelsets of a car (the columns of ``Result.contact_force`` per car), from the core.
-WHEELS_PER_CAR: int = _core.WHEELS_PER_CAR
-
-#: Names of the 10 vehicle DOFs in the order of ``Result.vehicle_disp``.
-VEHICLE_DOFS = ("Z_c", "beta_c", "Z_t1", "beta_t1", "Z_t2", "beta_t2", "Z_w1", "Z_w2", "Z_w3", "Z_w4")
-
-
 @dataclass(eq=False)
 class Result:
     """Histories of one run, sampled at ``t`` (s).
@@ -125,10 +118,11 @@ class Result:
     * ``disp`` (m) and ``acc`` (m/s²): shape (n_t, n_layers, n_points) — vertical displacement
       (positive down, measured from the unloaded structure, so the static deflection under
       the wheels is included) and acceleration of each layer at each observation point;
-    * ``vehicle_disp`` (m, rad) and ``vehicle_acc`` (m/s², rad/s²): shape (n_t, n_cars, 10),
-      DOFs [Z_c, β_c, Z_t1, β_t1, Z_t2, β_t2, Z_w1..Z_w4], displacements relative to the
-      static equilibrium at t = 0;
-    * ``contact_force`` (N): shape (n_t, n_wheels), force on the modelled rail per wheelset;
+    * ``vehicle_disp`` (m, rad) and ``vehicle_acc`` (m/s², rad/s²): shape (n_t, n_cars, n_dofs),
+      the DOFs of the run's vehicle model (``config.vehicles[0].dofs``: [Z_c, β_c, Z_t1, β_t1,
+      Z_t2, β_t2, Z_w1..Z_w4] for the 10-DOF car, [Z_c, Z_w] for a quarter car), displacements
+      relative to the static equilibrium at t = 0;
+    * ``contact_force`` (N): shape (n_t, n_wheels), force on the modelled rail per wheel;
     * ``contact_loss``: list of (wheel, t_start, t_end or None) periods without contact.
     """
 
@@ -176,8 +170,8 @@ class Result:
         """The histories as a :class:`pandas.DataFrame` indexed by ``t`` (s): per layer and
         observation point ``{layer}_disp@{x}`` (m) and ``{layer}_acc@{x}`` (m/s²); per car
         ``car{i}_{dof}`` displacement (m or rad, relative to the static state) and
-        ``car{i}_{dof}_acc`` (m/s² or rad/s²) for the DOFs Z_c, beta_c, Z_t1, beta_t1, Z_t2, beta_t2,
-        Z_w1..Z_w4; ``contact_force_{w}`` (N) per wheelset. Units in ``attrs["units"]``
+        ``car{i}_{dof}_acc`` (m/s² or rad/s²) for the DOFs of the vehicle model
+        (``config.vehicles[0].dofs``); ``contact_force_{w}`` (N) per wheel. Units in ``attrs["units"]``
         (needs pandas)."""
         from .tables import frame
 
@@ -188,7 +182,7 @@ class Result:
                     key = f"{name}_{q}@{x:g}"
                     cols[key], units[key] = arr[:, li, pi], unit
         for ci in range(self.vehicle_disp.shape[1]):
-            for di, dof in enumerate(VEHICLE_DOFS):
+            for di, dof in enumerate(self.config.vehicles[0].dofs):
                 rot = dof.startswith("beta")
                 for key, arr, unit in ((f"car{ci}_{dof}", self.vehicle_disp, "rad" if rot else "m"),
                                        (f"car{ci}_{dof}_acc", self.vehicle_acc, "rad/s²" if rot else "m/s²")):

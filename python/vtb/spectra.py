@@ -32,7 +32,7 @@ from .errors import config_error
 
 #: Level references (IEC / ISO conventions for vibration): acceleration 1e−6 m/s²,
 #: velocity 1e−9 m/s, displacement 1e−9 m.
-REFERENCE = {"acc": 1e-6, "vel": 1e-9, "disp": 1e-9}
+REFERENCE = {"acc": _core.ACC_REFERENCE, "vel": 1e-9, "disp": 1e-9}
 def low_pass(x, band_limit: float, dt: float) -> np.ndarray:
     """``x`` (a 1-D record sampled every ``dt`` s) low-passed at ``band_limit`` Hz with zero
     phase: the filter every band-limited index of a run is taken after, so a record filtered
@@ -44,8 +44,9 @@ def low_pass(x, band_limit: float, dt: float) -> np.ndarray:
     return _core.low_pass(np.ascontiguousarray(a), float(band_limit), float(dt))
 
 
-#: A band is reported when it spans at least this many Welch frequency bins.
-MIN_BINS_PER_BAND = 4
+#: A band is reported when it spans at least this many frequency bins (the core's rule for its
+#: band-level indices, ``output.band_levels``).
+MIN_BINS_PER_BAND: int = _core.MIN_BINS_PER_BAND
 #: IEC 61260-1 nominal midband frequencies of the one-third-octave bands 10 Hz … 8 kHz per
 #: decade (the labels; levels use the exact base-10 midbands).
 NOMINAL = (1.0, 1.25, 1.6, 2.0, 2.5, 3.15, 4.0, 5.0, 6.3, 8.0)

@@ -302,6 +302,11 @@ pub struct VehicleConfig {
     /// Crown radius of the rail head (m) across the rail, for the contact patch.
     #[serde(default = "default_rail_crown_radius")]
     pub rail_crown_radius: f64,
+    /// Vehicle model (docs/vehicles.md): `"car"` (Zhai's 10-DOF car) or `"quarter_car"` (a
+    /// sprung mass `m_c` on `k_p` ∥ `c_p` over one wheel `m_w`; the bogie and pitch fields 0).
+    /// Every vehicle of a run is of the same model.
+    #[serde(default)]
+    pub model: crate::vehicle::VehicleKind,
 }
 
 fn default_rails() -> usize {
@@ -318,15 +323,19 @@ impl VehicleConfig {
             .unwrap_or_else(|| 4.57e-8 * self.wheel_radius.powf(-0.149))
     }
 
-    /// Wheelset positions at t = 0, front to rear (wheels 1..4).
-    pub fn wheel_offsets(&self) -> [f64; 4] {
-        let xc = self.x_front - self.l_c - self.l_t;
-        [
-            xc + self.l_c + self.l_t,
-            xc + self.l_c - self.l_t,
-            xc - self.l_c + self.l_t,
-            xc - self.l_c - self.l_t,
-        ]
+    /// Wheel positions at t = 0, front to rear.
+    pub fn wheel_offsets(&self) -> Vec<f64> {
+        self.model.model(self).wheel_offsets(self.x_front)
+    }
+
+    /// Number of degrees of freedom of this vehicle's model.
+    pub fn n_dofs(&self) -> usize {
+        self.model.model(self).dofs().len()
+    }
+
+    /// Number of wheels of this vehicle's model.
+    pub fn n_wheels(&self) -> usize {
+        self.model.model(self).wheel_dofs().len()
     }
 }
 
@@ -484,6 +493,14 @@ pub struct OutputConfig {
     /// below 20 Hz (`vtb.deck_band` gives the rule for a configuration).
     #[serde(default = "default_deck_band")]
     pub deck_band: f64,
+    /// One-third-octave bands (nominal midband, Hz: 31.5, 63, …, 1000, …) of the energy-true
+    /// band-level indices: each layer's raw acceleration at the first observation point over
+    /// the analysis window, as `{layer}_acc_L{band}` (dB re 1e−6 m/s², the band's share of the
+    /// record's mean square, docs/spectra.md), with the equivalent level `{layer}_acc_Leq` (dB)
+    /// of the same record. A band must lie below the Nyquist frequency and span at least 4
+    /// frequency bins of the record. Empty (the default): no band levels.
+    #[serde(default)]
+    pub band_levels: Vec<f64>,
 }
 
 impl Default for OutputConfig {
@@ -494,6 +511,7 @@ impl Default for OutputConfig {
             band_limit: None,
             indices: None,
             deck_band: default_deck_band(),
+            band_levels: Vec::new(),
         }
     }
 }
@@ -655,7 +673,7 @@ fn finite(field: &str, v: f64) -> Result<f64> {
     }
 }
 
-fn positive(field: &str, v: f64) -> Result<f64> {
+pub(crate) fn positive(field: &str, v: f64) -> Result<f64> {
     finite(field, v)?;
     if v > 0.0 {
         Ok(v)
@@ -664,7 +682,7 @@ fn positive(field: &str, v: f64) -> Result<f64> {
     }
 }
 
-fn non_negative(field: &str, v: f64) -> Result<f64> {
+pub(crate) fn non_negative(field: &str, v: f64) -> Result<f64> {
     finite(field, v)?;
     if v >= 0.0 {
         Ok(v)
@@ -1040,6 +1058,17 @@ impl Config {
         for (i, v) in self.vehicles.iter().enumerate() {
             let p = format!("vehicles[{i}]");
             v.validate(&p)?;
+            // The engines and the records hold one vehicle model per run.
+            if v.model != self.vehicles[0].model {
+                return Err(VtbError::config(
+                    format!("{p}.model"),
+                    v.model.name(),
+                    format!(
+                        "every vehicle of a run is of one model; vehicles[0] is a {:?}",
+                        self.vehicles[0].model.name()
+                    ),
+                ));
+            }
             if v.contact_patch && self.discretisation.method != Method::Fem {
                 return Err(VtbError::config(
                     format!("{p}.contact_patch"),
@@ -1054,7 +1083,7 @@ impl Config {
             let offs = v.wheel_offsets();
             // Wheels may start before x = 0 and end beyond L: off the structure they run on a
             // rigid track (docs/model.md §4).
-            let (rear, front) = (offs[3], offs[0] + travel);
+            let (rear, front) = (offs[offs.len() - 1], offs[0] + travel);
             if !profile.values.is_empty()
                 && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9)
             {
@@ -1115,6 +1144,11 @@ impl Config {
             crate::filter::check("output.band_limit", fc, dt)?;
         }
         crate::filter::check("output.deck_band", self.output.deck_band, dt)?;
+        let steps = crate::results::window_steps(self.output.window, dt, self.n_steps());
+        for (i, &f) in self.output.band_levels.iter().enumerate() {
+            let n = steps.clone().count();
+            crate::bands::check(&format!("output.band_levels[{i}]"), f, dt, n)?;
+        }
         if let Some(names) = &self.output.indices {
             let known = crate::results::index_names(self);
             for (i, n) in names.iter().enumerate() {
@@ -1304,7 +1338,7 @@ impl Config {
         if profile.treads.is_empty() {
             return Ok(());
         }
-        let wheels = self.vehicles.len() * crate::vehicle::N_WHEELS;
+        let wheels: usize = self.vehicles.iter().map(VehicleConfig::n_wheels).sum();
         if profile.treads.len() != wheels {
             return Err(VtbError::config(
                 "irregularity.treads",
@@ -1627,29 +1661,8 @@ impl CouplingConfig {
 impl VehicleConfig {
     pub fn validate(&self, p: &str) -> Result<()> {
         let v = self;
-        for (name, val) in [
-            ("m_c", v.m_c),
-            ("j_c", v.j_c),
-            ("m_t", v.m_t),
-            ("j_t", v.j_t),
-            ("m_w", v.m_w),
-            ("k_s", v.k_s),
-            ("k_p", v.k_p),
-            ("l_c", v.l_c),
-            ("l_t", v.l_t),
-            ("wheel_radius", v.wheel_radius),
-        ] {
-            positive(&format!("{p}.{name}"), val)?;
-        }
-        non_negative(&format!("{p}.c_s"), v.c_s)?;
-        non_negative(&format!("{p}.c_p"), v.c_p)?;
-        if v.l_t >= v.l_c {
-            return Err(VtbError::config(
-                format!("{p}.l_t"),
-                v.l_t,
-                format!("half wheelbase must be smaller than l_c = {}", v.l_c),
-            ));
-        }
+        self.model.model(v).validate(p)?;
+        positive(&format!("{p}.wheel_radius"), v.wheel_radius)?;
         if v.rails == 0 {
             return Err(VtbError::config(format!("{p}.rails"), 0, "must be >= 1"));
         }

@@ -11,6 +11,7 @@
 //! println!("{:?}", result.metrics());
 //! ```
 
+pub mod bands;
 pub mod basis;
 pub mod budget;
 pub mod comfort;

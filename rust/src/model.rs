@@ -3,14 +3,14 @@
 use crate::config::{Config, Profile};
 use crate::error::Result;
 use crate::structure::Structure;
-use crate::vehicle::Car;
+use crate::vehicle::Vehicle;
 
 #[derive(Clone, Debug)]
 pub struct Model {
     pub cfg: Config,
     pub profile: Profile,
     pub structure: Structure,
-    pub cars: Vec<Car>,
+    pub cars: Vec<Vehicle>,
 }
 
 impl Model {
@@ -23,7 +23,7 @@ impl Model {
     /// Assembles the structure of a configuration already validated against `profile`.
     pub fn build(cfg: Config, profile: Profile) -> Result<Self> {
         let structure = Structure::build(&cfg)?;
-        let cars = cfg.vehicles.iter().map(Car::new).collect();
+        let cars = cfg.vehicles.iter().map(Vehicle::new).collect();
         Ok(Self {
             cfg,
             profile,

@@ -1,16 +1,22 @@
 //! The histories of one run and the metrics derived from them.
 
-use crate::config::Config;
+use crate::config::{Config, VehicleConfig};
 use crate::filter::low_pass;
 use crate::indices::{amplitude, rms, settle_time};
 use crate::structure::Structure;
-use crate::vehicle::N_DOF;
 use std::collections::BTreeMap;
 
 /// The indices of every recorded layer (`{layer}_{suffix}`).
 const LAYER_INDICES: [&str; 4] = ["disp_max", "acc_max", "acc_rms", "acc_settle"];
 /// A layer's raw acceleration peak, kept beside a band-limited one.
 const RAW_PEAK: &str = "acc_max_raw";
+/// A layer's equivalent acceleration level (dB) with band levels (`acc_L{band}`).
+const LEQ: &str = "acc_Leq";
+
+/// A layer's band-level index suffix for the band labelled `nominal` (Hz).
+fn band_suffix(nominal: f64) -> String {
+    format!("acc_L{nominal}")
+}
 /// The first car's indices.
 const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
 /// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::comfort`]).
@@ -34,6 +40,12 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
         for s in LAYER_INDICES.iter().copied().chain(raw) {
             out.push(format!("{}_{s}", l.name));
         }
+        if !cfg.output.band_levels.is_empty() {
+            out.push(format!("{}_{LEQ}", l.name));
+        }
+        for &f in &cfg.output.band_levels {
+            out.push(format!("{}_{}", l.name, band_suffix(f)));
+        }
     }
     if cfg.structure.layers.len() > 1 {
         out.push(DECK.to_string());
@@ -45,7 +57,12 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
             out.extend((1..cfg.vehicles.len()).map(|k| car_comfort(k)));
         }
         out.extend(CONTACT_INDICES.map(String::from));
-        for w in 0..cfg.vehicles.len() * crate::vehicle::N_WHEELS {
+        for w in 0..cfg
+            .vehicles
+            .iter()
+            .map(VehicleConfig::n_wheels)
+            .sum::<usize>()
+        {
             out.extend(WHEEL_INDICES.map(|s| format!("wheel{w}_{s}")));
         }
     }
@@ -65,7 +82,13 @@ fn car_comfort(k: usize) -> String {
 pub fn layer_of_index(name: &str, layer: &str) -> bool {
     name.strip_prefix(layer)
         .and_then(|s| s.strip_prefix('_'))
-        .is_some_and(|s| LAYER_INDICES.contains(&s) || s == RAW_PEAK)
+        .is_some_and(|s| {
+            LAYER_INDICES.contains(&s)
+                || s == RAW_PEAK
+                || s == LEQ
+                || s.strip_prefix("acc_L")
+                    .is_some_and(|f| f.parse::<f64>().is_ok())
+        })
 }
 
 /// A period during which a wheel had no contact (P = 0). `t_end` is `None` if contact was
@@ -126,6 +149,8 @@ pub struct RunResult {
     pub window: Option<[f64; 2]>,
     /// Low-pass frequency (Hz) of the acceleration indices, `output.band_limit`.
     pub band_limit: Option<f64>,
+    /// Band labels (Hz) of the band-level indices, `output.band_levels`.
+    pub band_levels: Vec<f64>,
     /// The indices `metrics` reports, `output.indices` (all without).
     pub indices: Option<Vec<String>>,
     /// The deck among the recorded layers (the structure's bottom layer), if recorded.
@@ -148,7 +173,10 @@ impl RunResult {
         let nl = layers.len();
         let len = n_steps + 1;
         let (n_cars, vehicle_dofs) = match record {
-            Record::Full => (n_cars, N_DOF),
+            Record::Full => (
+                n_cars,
+                cfg.vehicles.first().map_or(0, VehicleConfig::n_dofs),
+            ),
             Record::Metrics => (n_cars, 1),
         };
         Self {
@@ -167,6 +195,7 @@ impl RunResult {
             contact_loss: Vec::new(),
             window: cfg.output.window,
             band_limit: cfg.output.band_limit,
+            band_levels: cfg.output.band_levels.clone(),
             indices: cfg.output.indices.clone(),
             deck: (st.layers.len() > 1)
                 .then(|| layers.iter().position(|&l| l + 1 == st.layers.len()))
@@ -220,6 +249,10 @@ impl RunResult {
     /// whole record low-passed at that frequency (zero phase, [`crate::filter`]) before the
     /// window is applied, and each layer's raw peak is kept as `{name}_acc_max_raw`.
     ///
+    /// With band levels ([`RunResult::band_levels`]) every layer adds its energy-true
+    /// one-third-octave levels `{name}_acc_L{band}` and its equivalent level `{name}_acc_Leq`
+    /// (dB re 1e−6 m/s², [`crate::bands`]) of the raw record over the window.
+    ///
     /// With `output.indices` ([`RunResult::indices`]) only those are reported.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
         let steps = self.window_steps();
@@ -244,6 +277,22 @@ impl RunResult {
             ];
             for (s, v) in LAYER_INDICES.iter().zip(values) {
                 m.insert(format!("{name}_{s}"), v);
+            }
+            let wanted = std::iter::once(LEQ.to_string())
+                .chain(self.band_levels.iter().map(|&f| band_suffix(f)))
+                .any(|s| self.wants(&format!("{name}_{s}")));
+            if !self.band_levels.is_empty() && wanted {
+                let raw = &self.layer_acc(li, 0)[steps.clone()];
+                let powers = crate::bands::band_powers(raw, self.dt, &self.band_levels);
+                for (&f, p) in self.band_levels.iter().zip(powers) {
+                    let level = crate::bands::level(p, crate::bands::ACC_REFERENCE);
+                    m.insert(format!("{name}_{}", band_suffix(f)), level);
+                }
+                let ms = rms(raw).powi(2);
+                m.insert(
+                    format!("{name}_{LEQ}"),
+                    crate::bands::level(ms, crate::bands::ACC_REFERENCE),
+                );
             }
         }
         if self.n_cars > 0 {
@@ -308,14 +357,24 @@ impl RunResult {
 
     /// The steps inside the analysis window (all steps without one).
     fn window_steps(&self) -> std::ops::RangeInclusive<usize> {
-        match self.window {
-            None => 0..=self.n_steps,
-            Some([t0, t1]) => {
-                // A window edge within 1e-9 steps of a sample includes it.
-                let first = ((t0 / self.dt) - 1e-9).ceil().max(0.0) as usize;
-                let last = ((t1 / self.dt) + 1e-9).floor() as usize;
-                first.min(self.n_steps)..=last.min(self.n_steps).max(first.min(self.n_steps))
-            }
+        window_steps(self.window, self.dt, self.n_steps)
+    }
+}
+
+/// The steps of a run of `n_steps` steps of `dt` s inside the analysis window `window` (all
+/// steps without one).
+pub fn window_steps(
+    window: Option<[f64; 2]>,
+    dt: f64,
+    n_steps: usize,
+) -> std::ops::RangeInclusive<usize> {
+    match window {
+        None => 0..=n_steps,
+        Some([t0, t1]) => {
+            // A window edge within 1e-9 steps of a sample includes it.
+            let first = ((t0 / dt) - 1e-9).ceil().max(0.0) as usize;
+            let last = ((t1 / dt) + 1e-9).floor() as usize;
+            first.min(n_steps)..=last.min(n_steps).max(first.min(n_steps))
         }
     }
 }

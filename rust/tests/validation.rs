@@ -4,14 +4,15 @@
 use faer::Mat;
 use vtb::config::VehicleConfig;
 use vtb::presets::crh3;
-use vtb::vehicle::Car;
+use vtb::vehicle::Vehicle;
 
 /// Eigenfrequencies (Hz) of the car with its wheelsets clamped: body bounce, body pitch,
 /// bogie bounce (×2), bogie pitch (×2), from M⁻¹ᐟ²·K·M⁻¹ᐟ² of the first six DOFs.
 fn clamped_frequencies(v: &VehicleConfig) -> Vec<f64> {
-    let car = Car::new(v);
+    let car = Vehicle::new(v);
+    let n = car.n_dofs();
     let a = Mat::<f64>::from_fn(6, 6, |i, j| {
-        car.k[i][j] / (car.mass[i] * car.mass[j]).sqrt()
+        car.k[i * n + j] / (car.mass[i] * car.mass[j]).sqrt()
     });
     let mut w: Vec<f64> = a
         .self_adjoint_eigenvalues(faer::Side::Lower)

@@ -184,6 +184,15 @@ fn train_library() -> String {
     serde_json::to_string(&vtb::trains::library()).expect("the library serialises")
 }
 
+/// Each vehicle model's DOF names and wheel count: `{name: (dofs, wheels)}`.
+#[pyfunction]
+fn vehicle_models() -> std::collections::BTreeMap<&'static str, (Vec<&'static str>, usize)> {
+    vtb::vehicle::VehicleKind::ALL
+        .iter()
+        .map(|k| (k.name(), k.layout()))
+        .collect()
+}
+
 /// The JSON configuration of a named preset (`"paper"`).
 #[pyfunction]
 fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
@@ -688,6 +697,7 @@ fn plausible_ranges() -> Vec<(&'static str, f64, f64, &'static str, &'static str
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
     m.add_function(wrap_pyfunction!(train_library, m)?)?;
+    m.add_function(wrap_pyfunction!(vehicle_models, m)?)?;
     m.add_function(wrap_pyfunction!(wheel_travel, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
@@ -708,6 +718,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
     m.add("SYNTHESIS_LANES", vtb::simulate::SYNTHESIS_LANES)?;
-    m.add("WHEELS_PER_CAR", vtb::vehicle::N_WHEELS)?;
+    m.add("MIN_BINS_PER_BAND", vtb::bands::MIN_BINS_PER_BAND)?;
+    m.add("ACC_REFERENCE", vtb::bands::ACC_REFERENCE)?;
     Ok(())
 }

@@ -12,7 +12,7 @@ use crate::linalg::sparse::{Assembler, CsrMatrix, Ldlt};
 use crate::model::Model;
 use crate::results::{ContactLoss, Record, RunResult};
 use crate::synthesis::{self, Reduction};
-use crate::vehicle::{Car, N_DOF, N_WHEELS, WHEEL0};
+use crate::vehicle::Vehicle;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -355,7 +355,7 @@ impl Mover {
 
 /// A car's own Newmark stepper (one lane per job); its contact ports are the wheelset DOFs.
 pub(crate) struct CarRun<const W: usize> {
-    pub(crate) car: Car,
+    pub(crate) car: Vehicle,
     pub(crate) nm: Newmark<W>,
     m: CsrMatrix,
     k: CsrMatrix,
@@ -370,32 +370,33 @@ pub(crate) struct CarRun<const W: usize> {
 }
 
 impl<const W: usize> CarRun<W> {
-    pub(crate) fn new(car: &Car, dt: f64, g: f64) -> Result<Self> {
-        let dense = |m: &[[f64; N_DOF]; N_DOF]| {
-            let mut a = Assembler::new(N_DOF);
-            for i in 0..N_DOF {
-                for j in 0..N_DOF {
-                    a.add(i, j, m[i][j]);
+    pub(crate) fn new(car: &Vehicle, dt: f64, g: f64) -> Result<Self> {
+        let nd = car.n_dofs();
+        let dense = |m: &[f64]| {
+            let mut a = Assembler::new(nd);
+            for i in 0..nd {
+                for j in 0..nd {
+                    a.add(i, j, m[i * nd + j]);
                 }
             }
             a.finish()
         };
-        let mut am = Assembler::new(N_DOF);
-        for i in 0..N_DOF {
+        let mut am = Assembler::new(nd);
+        for i in 0..nd {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
         let mut nm = Newmark::<W>::new(&m, &c, &k, dt, &[], 1, None, &[])?;
-        for i in 0..N_DOF {
+        for i in 0..nd {
             nm.observe(&Shape {
                 start: i,
                 values: vec![1.0],
             });
         }
-        let mut ports = PortBlock::new(N_DOF);
-        for w in 0..N_WHEELS {
+        let mut ports = PortBlock::new(nd);
+        for (w, &d) in car.wheel_dofs.iter().enumerate() {
             ports.vecs[w] = nm.vector(&Shape {
-                start: WHEEL0 + w,
+                start: d,
                 values: vec![1.0],
             });
         }
@@ -411,7 +412,7 @@ impl<const W: usize> CarRun<W> {
             compliance,
             f_prev: gravity.clone(),
             gravity,
-            z0: vec![0.0; N_DOF * W],
+            z0: vec![0.0; nd * W],
         })
     }
 
@@ -420,21 +421,23 @@ impl<const W: usize> CarRun<W> {
     pub(crate) fn set_static(
         &mut self,
         lane: usize,
-        rail: [f64; N_WHEELS],
+        rail: &[f64],
         loads: &[f64],
         g: f64,
     ) -> Result<()> {
-        let zw: [f64; N_WHEELS] =
-            std::array::from_fn(|w| rail[w] + compression(self.car.hertz_g, loads[w]));
+        let zw: Vec<f64> = (rail.iter().zip(loads))
+            .map(|(r, &l)| r + compression(self.car.hertz_g, l))
+            .collect();
         let (_, z) = self.car.static_state(g, &zw);
         let mut f = self.car.gravity(g);
-        for w in 0..N_WHEELS {
-            f[WHEEL0 + w] -= self.car.rails * loads[w];
+        for (&d, l) in self.car.wheel_dofs.iter().zip(loads) {
+            f[d] -= self.car.rails * l;
         }
         let av = accelerations(&self.m, &self.k, &z, &f)?;
+        let nd = z.len();
         self.nm
-            .set_state(lane, &z, &[0.0; N_DOF], &av, &self.k, &self.m);
-        for i in 0..N_DOF {
+            .set_state(lane, &z, &vec![0.0; nd], &av, &self.k, &self.m);
+        for i in 0..nd {
             self.z0[i * W + lane] = z[i];
         }
         Ok(())
@@ -444,7 +447,7 @@ impl<const W: usize> CarRun<W> {
     pub(crate) fn set_force(&mut self, p: &[[f64; GW]; W]) {
         self.f_prev.clone_from(&self.gravity);
         for (lane, pl) in p.iter().enumerate() {
-            for w in 0..N_WHEELS {
+            for w in 0..self.car.n_wheels() {
                 self.ports.vecs[w].add_to_lane::<W>(
                     &mut self.f_prev,
                     lane,
@@ -524,8 +527,8 @@ impl RailCorrection<'_> {
 pub(crate) fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
     cars.iter()
         .flat_map(|c| {
-            let (r, _) = c.car.static_state(g, &[0.0; N_WHEELS]);
-            r.map(|ri| ri / c.car.rails)
+            let (r, _) = c.car.static_state(g, &vec![0.0; c.car.n_wheels()]);
+            r.into_iter().map(|ri| ri / c.car.rails).collect::<Vec<_>>()
         })
         .collect()
 }
@@ -603,6 +606,8 @@ pub struct Simulation<'m, const W: usize = 1> {
     f_next: Vec<f64>,
     movers: Vec<Mover>,
     cars: Vec<CarRun<W>>,
+    /// Wheels per car (one vehicle model per run): wheel `w` of car `ci` is `ci·wpc + w`.
+    wpc: usize,
     /// Rail shape vectors at the wheels, one block per car.
     track_ports: Vec<PortBlock<W>>,
     /// Add the rail elements' local flexibility under the wheels (finite-element rails).
@@ -700,12 +705,13 @@ impl<'m, const W: usize> Simulation<'m, W> {
             .iter()
             .map(|c| CarRun::new(c, dt, cfg.solver.gravity))
             .collect::<Result<Vec<_>>>()?;
-        let nw = cars.len() * N_WHEELS;
+        let wpc = cars.first().map_or(0, |c| c.car.n_wheels());
+        let nw = cars.len() * wpc;
         let patch: Vec<f64> = static_wheel_loads(&cars, cfg.solver.gravity)
             .iter()
             .enumerate()
             .map(|(wi, &load)| {
-                let v = &cfg.vehicles[wi / N_WHEELS];
+                let v = &cfg.vehicles[wi / wpc];
                 if v.contact_patch && load > 0.0 {
                     patch_half_length(load, v.wheel_radius, v.rail_crown_radius)
                 } else {
@@ -718,10 +724,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
             .map(|&a| st.wheel_shape_len(a))
             .max()
             .unwrap_or(0);
-        let g: Vec<f64> = cars
-            .iter()
-            .flat_map(|c| [c.car.hertz_g; N_WHEELS])
-            .collect();
+        let g: Vec<f64> = cars.iter().flat_map(|c| vec![c.car.hertz_g; wpc]).collect();
         let lanes = lanes
             .iter()
             .zip(setup)
@@ -734,7 +737,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     cfg.solver.contact_tol,
                     cfg.solver.contact_max_iter,
                 )
-                .with_block(N_WHEELS),
+                .with_block(wpc),
                 error,
                 loss_open: vec![None; nw],
             })
@@ -808,6 +811,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 values: Vec::with_capacity(wheel_shape_len),
             },
             cars,
+            wpc,
             p: vec![0.0; nw * W],
             shape: Shape {
                 start: 0,
@@ -849,9 +853,9 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let loads = static_wheel_loads(&self.cars, g);
         if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
             return Err(VtbError::config(
-                format!("vehicles[{}]", i / N_WHEELS),
+                format!("vehicles[{}]", i / self.wpc),
                 l,
-                format!("wheelset {} carries no static load", i % N_WHEELS + 1),
+                format!("wheel {} carries no static load", i % self.wpc + 1),
             ));
         }
         let nw = loads.len();
@@ -889,14 +893,20 @@ impl<'m, const W: usize> Simulation<'m, W> {
             add(m.layer, m.x0, m.magnitude, 0.0);
         }
         for (ci, c) in self.cars.iter().enumerate() {
-            for w in 0..N_WHEELS {
-                let wi = ci * N_WHEELS + w;
-                add(0, c.car.wheel_x0[w], loads[wi], self.patch[wi]);
+            for (w, &x0) in c.car.wheel_x0.iter().enumerate() {
+                let wi = ci * self.wpc + w;
+                add(0, x0, loads[wi], self.patch[wi]);
             }
         }
         if let Some(rc) = self.correction.as_mut() {
             rc.g_prev = vec![g0; W];
-            rc.set_rows(self.cars.iter().flat_map(|c| c.car.wheel_x0), 0.0, 0.0);
+            rc.set_rows(
+                self.cars
+                    .iter()
+                    .flat_map(|c| c.car.wheel_x0.iter().copied()),
+                0.0,
+                0.0,
+            );
         }
         self.f_prev = self.track.to_stepper(&f0);
         // Each lane's state from its own matrices (its dampers' parameters), as in a single
@@ -913,8 +923,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
         }
         for (ci, c) in self.cars.iter_mut().enumerate() {
             let p: [f64; GW] = std::array::from_fn(|w| {
-                if w < N_WHEELS {
-                    loads[ci * N_WHEELS + w]
+                if w < self.wpc {
+                    loads[ci * self.wpc + w]
                 } else {
                     0.0
                 }
@@ -966,14 +976,15 @@ impl<'m, const W: usize> Simulation<'m, W> {
         self.track.set_state(j, &u0, &vec![0.0; n], &a0, k_l, m_l);
         let profile = self.lanes[j].profile;
         for (ci, c) in self.cars.iter_mut().enumerate() {
-            let mut rail = [0.0; N_WHEELS];
-            for (w, r) in rail.iter_mut().enumerate() {
+            let wpc = self.wpc;
+            let mut rail = [0.0; GW];
+            for (w, r) in rail.iter_mut().take(wpc).enumerate() {
                 let x = c.car.wheel_x0[w];
-                st.wheel_shape_into(x, self.patch[ci * N_WHEELS + w], &mut self.wheel_shape);
+                st.wheel_shape_into(x, self.patch[ci * wpc + w], &mut self.wheel_shape);
                 *r = dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
-                    + cfg.irregularity_share(0.0) * profile.under(ci * N_WHEELS + w, x);
+                    + cfg.irregularity_share(0.0) * profile.under(ci * wpc + w, x);
             }
-            c.set_static(j, rail, &loads[ci * N_WHEELS..(ci + 1) * N_WHEELS], g)?;
+            c.set_static(j, &rail[..wpc], &loads[ci * wpc..(ci + 1) * wpc], g)?;
         }
         Ok(())
     }
@@ -983,8 +994,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let nw = self.p.len() / W;
         std::array::from_fn(|lane| {
             std::array::from_fn(|w| {
-                if w < N_WHEELS {
-                    self.p[lane * nw + ci * N_WHEELS + w]
+                if w < self.wpc {
+                    self.p[lane * nw + ci * self.wpc + w]
                 } else {
                     0.0
                 }
@@ -1193,7 +1204,7 @@ mod tests {
     #[test]
     fn treads_on_every_wheel_equal_the_rail_profile() {
         let cfg = short_with_dampers();
-        let wheels = cfg.vehicles.len() * N_WHEELS;
+        let wheels = cfg.vehicles.len() * 4;
         let wavy: Vec<f64> = (0..20_000).map(|i| 1e-4 * (i as f64 * 0.3).sin()).collect();
         let grid = |values: Vec<f64>, treads: Vec<Vec<f64>>| Profile {
             x0: -1.0,
@@ -1239,7 +1250,7 @@ mod tests {
         };
         let e = cfg.validate(&p).unwrap_err().to_string();
         assert!(e.contains("irregularity.treads"), "{e}");
-        let wheels = cfg.vehicles.len() * N_WHEELS;
+        let wheels = cfg.vehicles.len() * 4;
         let mut rows = vec![Vec::new(); wheels];
         rows[1] = vec![0.0; 10];
         let e = cfg

@@ -6,7 +6,6 @@ use super::{CANCEL_POLL, Control, FINITE_POLL, Simulation, finish, note_contact,
 use crate::error::{Result, VtbError};
 use crate::integrator::GW;
 use crate::results::RunResult;
-use crate::vehicle::N_WHEELS;
 
 impl<'m, const W: usize> Simulation<'m, W> {
     /// Runs all steps of every lane. The outer error is shared by all lanes (setup, or
@@ -84,14 +83,22 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let (st, v) = (&self.model.structure, self.model.cfg.speed);
         self.track.begin_step(&self.f_prev, &self.f_next);
         if let Some(rc) = self.correction.as_mut() {
-            rc.set_rows(self.cars.iter().flat_map(|c| c.car.wheel_x0), v, t1);
+            rc.set_rows(
+                self.cars
+                    .iter()
+                    .flat_map(|c| c.car.wheel_x0.iter().copied()),
+                v,
+                t1,
+            );
         }
         for (ci, c) in self.cars.iter_mut().enumerate() {
             let ports = &mut self.track_ports[ci];
-            let xs: [f64; N_WHEELS] = std::array::from_fn(|w| c.car.wheel_x0[w] + v * t1);
+            let wpc = self.wpc;
+            // Padded to the port width with the last wheel (the padding is not read).
+            let xs: [f64; GW] = std::array::from_fn(|w| c.car.wheel_x0[w.min(wpc - 1)] + v * t1);
             let terms = self.correction.as_ref().map(|rc| rc.fs.load_terms_at(xs));
-            for w in 0..N_WHEELS {
-                let a = self.patch[ci * N_WHEELS + w];
+            for w in 0..wpc {
+                let a = self.patch[ci * wpc + w];
                 st.wheel_shape_into(xs[w], a, &mut self.wheel_shape);
                 self.track
                     .vector_into(&self.wheel_shape, &mut ports.vecs[w]);
@@ -105,7 +112,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     for g in 0..4 {
                         fv.val[rc.fs.dofs[g] - self.wheel_shape.start] += f[g];
                     }
-                    rc.wheel_r[ci * N_WHEELS + w] = r;
+                    rc.wheel_r[ci * wpc + w] = r;
                 }
             }
             self.track.prepare_ports(ports);
@@ -120,18 +127,17 @@ impl<'m, const W: usize> Simulation<'m, W> {
         let v = cfg.speed;
         let share = cfg.irregularity_share(t1);
         let nw = self.p.len() / W;
-        let ncars = self.cars.len();
+        let (ncars, wpc) = (self.cars.len(), self.wpc);
         let (amat, delta_free) = (&mut self.amat, &mut self.delta_free);
         for ci in 0..ncars {
             let c = &self.cars[ci];
             let rail = self.track.free_port_disp(&self.track_ports[ci]);
             let wheel = c.nm.free_port_disp(&c.ports);
             for (lane, l) in self.lanes.iter().enumerate() {
-                for w in 0..N_WHEELS {
+                for w in 0..wpc {
                     let x = c.car.wheel_x0[w] + v * t1;
-                    delta_free[lane * nw + ci * N_WHEELS + w] = wheel[lane][w]
-                        - rail[lane][w]
-                        - share * l.profile.under(ci * N_WHEELS + w, x);
+                    delta_free[lane * nw + ci * wpc + w] =
+                        wheel[lane][w] - rail[lane][w] - share * l.profile.under(ci * wpc + w, x);
                 }
             }
             for cj in 0..ncars {
@@ -140,14 +146,14 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     .port_compliance(&self.track_ports[ci], &self.track_ports[cj]);
                 for (lane, gl) in g.iter().enumerate() {
                     let a = &mut amat[lane * nw * nw..(lane + 1) * nw * nw];
-                    for r in 0..N_WHEELS {
-                        for s in 0..N_WHEELS {
+                    for r in 0..wpc {
+                        for s in 0..wpc {
                             let own = if ci == cj {
                                 c.car.rails * c.compliance[r][s]
                             } else {
                                 0.0
                             };
-                            a[(ci * N_WHEELS + r) * nw + cj * N_WHEELS + s] = gl[r][s] + own;
+                            a[(ci * wpc + r) * nw + cj * wpc + s] = gl[r][s] + own;
                         }
                     }
                 }
@@ -157,8 +163,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 // series with the contact, so the static wheel–rail stiffness does not
                 // depend on where in an element the wheel is (no element-passing
                 // excitation from it). Wheels are more than an element apart.
-                for w in 0..N_WHEELS {
-                    let wi = ci * N_WHEELS + w;
+                for w in 0..wpc {
+                    let wi = ci * wpc + w;
                     let f = st.wheel_flexibility(c.car.wheel_x0[w] + v * t1, self.patch[wi]);
                     for lane in 0..W {
                         amat[lane * nw * nw + wi * nw + wi] += f;
@@ -204,11 +210,11 @@ impl<'m, const W: usize> Simulation<'m, W> {
         std::mem::swap(&mut self.f_prev, &mut self.f_next);
         for (ci, ports) in self.track_ports.iter().enumerate() {
             for lane in 0..W {
-                for w in 0..N_WHEELS {
+                for w in 0..self.wpc {
                     ports.force_vec(w).add_to_lane::<W>(
                         &mut self.f_prev,
                         lane,
-                        self.p[lane * nw + ci * N_WHEELS + w],
+                        self.p[lane * nw + ci * self.wpc + w],
                     );
                 }
             }

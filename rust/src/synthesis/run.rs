@@ -36,7 +36,6 @@ use crate::simulate::{
     CANCEL_POLL, CarRun, Control, FINITE_POLL, LaneSpec, Mover, finish, note_contact, poll,
     static_wheel_loads,
 };
-use crate::vehicle::N_WHEELS;
 use std::sync::Arc;
 
 /// One run on a reduction.
@@ -184,6 +183,8 @@ struct Run<'a, const W: usize> {
     lanes: Vec<Lane<'a>>,
     // Vehicles and wheels.
     cars: Vec<CarRun<W>>,
+    /// Wheels per car (one vehicle model per run): wheel `w` of car `ci` is `ci·wpc + w`.
+    wpc: usize,
     loads: Vec<f64>,
     patch: Vec<f64>,
     wheel_x0: Vec<f64>,
@@ -295,20 +296,21 @@ impl<'a, const W: usize> Run<'a, W> {
             .iter()
             .map(|c| CarRun::<W>::new(c, dt, g))
             .collect::<Result<Vec<_>>>()?;
-        let nw = cars.len() * N_WHEELS;
+        let wpc = cars.first().map_or(0, |c| c.car.n_wheels());
+        let nw = cars.len() * wpc;
         let loads = static_wheel_loads(&cars, g);
         if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
             return Err(VtbError::config(
-                format!("vehicles[{}]", i / N_WHEELS),
+                format!("vehicles[{}]", i / wpc),
                 l,
-                format!("wheelset {} carries no static load", i % N_WHEELS + 1),
+                format!("wheel {} carries no static load", i % wpc + 1),
             ));
         }
         let patch: Vec<f64> = loads
             .iter()
             .enumerate()
             .map(|(wi, &load)| {
-                let veh = &cfg.vehicles[wi / N_WHEELS];
+                let veh = &cfg.vehicles[wi / wpc];
                 if veh.contact_patch {
                     patch_half_length(load, veh.wheel_radius, veh.rail_crown_radius)
                 } else {
@@ -316,11 +318,8 @@ impl<'a, const W: usize> Run<'a, W> {
                 }
             })
             .collect();
-        let hertz: Vec<f64> = cars
-            .iter()
-            .flat_map(|c| [c.car.hertz_g; N_WHEELS])
-            .collect();
-        let wheel_x0: Vec<f64> = cars.iter().flat_map(|c| c.car.wheel_x0).collect();
+        let hertz: Vec<f64> = cars.iter().flat_map(|c| vec![c.car.hertz_g; wpc]).collect();
+        let wheel_x0: Vec<f64> = cars.iter().flat_map(|c| c.car.wheel_x0.clone()).collect();
         let wheel_shapes: Vec<Shape> = (0..nw)
             .map(|w| Shape {
                 start: 0,
@@ -436,7 +435,7 @@ impl<'a, const W: usize> Run<'a, W> {
                         cfg.solver.contact_tol,
                         cfg.solver.contact_max_iter,
                     )
-                    .with_block(N_WHEELS),
+                    .with_block(wpc),
                     dampers,
                     s_inv,
                     error,
@@ -469,6 +468,7 @@ impl<'a, const W: usize> Run<'a, W> {
             observer_psi,
             n_rail,
             lanes,
+            wpc,
             loads,
             patch,
             wheel_x0,
@@ -628,23 +628,23 @@ impl<'a, const W: usize> Run<'a, W> {
                 d.states[1].x = *s;
             }
         }
+        let wpc = self.wpc;
         for (ci, c) in self.cars.iter_mut().enumerate() {
+            let wheels = ci * wpc..(ci + 1) * wpc;
             for (lane, l) in self.lanes.iter().enumerate() {
-                let rail: [f64; N_WHEELS] = std::array::from_fn(|w| {
-                    let wi = ci * N_WHEELS + w;
-                    rail0[wi]
-                        + cfg.irregularity_share(0.0) * l.spec.profile.under(wi, self.wheel_x0[wi])
-                });
-                c.set_static(
-                    lane,
-                    rail,
-                    &self.loads[ci * N_WHEELS..(ci + 1) * N_WHEELS],
-                    g,
-                )?;
+                let rail: Vec<f64> = wheels
+                    .clone()
+                    .map(|wi| {
+                        rail0[wi]
+                            + cfg.irregularity_share(0.0)
+                                * l.spec.profile.under(wi, self.wheel_x0[wi])
+                    })
+                    .collect();
+                c.set_static(lane, &rail, &self.loads[wheels.clone()], g)?;
             }
             let pc: [f64; GW] = std::array::from_fn(|w| {
-                if w < N_WHEELS {
-                    self.loads[ci * N_WHEELS + w]
+                if w < wpc {
+                    self.loads[ci * wpc + w]
                 } else {
                     0.0
                 }
@@ -804,8 +804,8 @@ impl<'a, const W: usize> Run<'a, W> {
             car.nm.begin_step(&car.f_prev, &car.gravity);
             let wheel = car.nm.free_port_disp(&car.ports);
             for c in 0..W {
-                for w in 0..N_WHEELS {
-                    let wi = ci * N_WHEELS + w;
+                for w in 0..self.wpc {
+                    let wi = ci * self.wpc + w;
                     let mut rail =
                         self.rail_free[wi][c] + self.mover_residual(&self.wheel_shapes[wi]);
                     for e in 0..nd {
@@ -830,10 +830,10 @@ impl<'a, const W: usize> Run<'a, W> {
                     for e in 0..nd {
                         x -= self.gdw[e * nw + wi] * t_mat[e * nw + vi];
                     }
-                    let (ci, cj) = (wi / N_WHEELS, vi / N_WHEELS);
+                    let (ci, cj) = (wi / self.wpc, vi / self.wpc);
                     if ci == cj {
                         let car = &self.cars[ci];
-                        x += car.car.rails * car.compliance[wi % N_WHEELS][vi % N_WHEELS];
+                        x += car.car.rails * car.compliance[wi % self.wpc][vi % self.wpc];
                     }
                     a[wi * nw + vi] = x;
                     a[vi * nw + wi] = x;
@@ -920,8 +920,8 @@ impl<'a, const W: usize> Run<'a, W> {
         for (ci, car) in self.cars.iter_mut().enumerate() {
             let pc: [[f64; GW]; W] = std::array::from_fn(|c| {
                 std::array::from_fn(|w| {
-                    if w < N_WHEELS {
-                        self.p[c * nw + ci * N_WHEELS + w]
+                    if w < self.wpc {
+                        self.p[c * nw + ci * self.wpc + w]
                     } else {
                         0.0
                     }

@@ -1,0 +1,228 @@
+//! Zhai's 10-DOF vertical car (docs/vehicles.md).
+//!
+//! DOFs, z positive downward, pitch positive nose-up, front at larger x:
+//! `[Z_c, β_c, Z_t1, β_t1, Z_t2, β_t2, Z_w1, Z_w2, Z_w3, Z_w4]`; bogie 1 and wheelset 1 lead.
+//! Each suspension element is a spring–dashpot acting on a relative displacement dᵀz
+//! (e.g. F_s1 = K_s(Z_c − l_c·β_c − Z_t1)).
+
+use super::{Dof, Element, VehicleModel};
+use crate::config::{VehicleConfig, non_negative, positive};
+use crate::error::{Result, VtbError};
+
+/// Index of the first wheelset DOF.
+const WHEEL0: usize = 6;
+
+const DOFS: &[Dof] = &[
+    Dof {
+        name: "Z_c",
+        translational: true,
+    },
+    Dof {
+        name: "beta_c",
+        translational: false,
+    },
+    Dof {
+        name: "Z_t1",
+        translational: true,
+    },
+    Dof {
+        name: "beta_t1",
+        translational: false,
+    },
+    Dof {
+        name: "Z_t2",
+        translational: true,
+    },
+    Dof {
+        name: "beta_t2",
+        translational: false,
+    },
+    Dof {
+        name: "Z_w1",
+        translational: true,
+    },
+    Dof {
+        name: "Z_w2",
+        translational: true,
+    },
+    Dof {
+        name: "Z_w3",
+        translational: true,
+    },
+    Dof {
+        name: "Z_w4",
+        translational: true,
+    },
+];
+
+/// The 10-DOF car of a vehicle configuration.
+pub struct ZhaiCar<'a>(pub &'a VehicleConfig);
+
+impl VehicleModel for ZhaiCar<'_> {
+    fn dofs(&self) -> &'static [Dof] {
+        DOFS
+    }
+
+    fn masses(&self) -> Vec<f64> {
+        let v = self.0;
+        vec![
+            v.m_c, v.j_c, v.m_t, v.j_t, v.m_t, v.j_t, v.m_w, v.m_w, v.m_w, v.m_w,
+        ]
+    }
+
+    fn elements(&self) -> Vec<Element> {
+        let v = self.0;
+        let mut out = Vec::with_capacity(6);
+        // Secondary: bogie i (DOF 2+2i) under the body point Z_c ∓ l_c·β_c.
+        for (i, sign) in [(0, -1.0), (1, 1.0)] {
+            out.push(Element {
+                d: vec![(0, 1.0), (1, sign * v.l_c), (2 + 2 * i, -1.0)],
+                k: v.k_s,
+                c: v.c_s,
+            });
+        }
+        // Primary: wheelsets a (front, −l_t·β_t) and b (rear, +l_t·β_t) of each bogie.
+        for bogie in 0..2 {
+            let (zt, bt) = (2 + 2 * bogie, 3 + 2 * bogie);
+            for (j, sign) in [(0, -1.0), (1, 1.0)] {
+                out.push(Element {
+                    d: vec![
+                        (zt, 1.0),
+                        (bt, sign * v.l_t),
+                        (WHEEL0 + 2 * bogie + j, -1.0),
+                    ],
+                    k: v.k_p,
+                    c: v.c_p,
+                });
+            }
+        }
+        out
+    }
+
+    fn wheel_dofs(&self) -> Vec<usize> {
+        (WHEEL0..WHEEL0 + 4).collect()
+    }
+
+    fn wheel_offsets(&self, x_front: f64) -> Vec<f64> {
+        let v = self.0;
+        let xc = x_front - v.l_c - v.l_t;
+        vec![
+            xc + v.l_c + v.l_t,
+            xc + v.l_c - v.l_t,
+            xc - v.l_c + v.l_t,
+            xc - v.l_c - v.l_t,
+        ]
+    }
+
+    fn validate(&self, p: &str) -> Result<()> {
+        let v = self.0;
+        for (name, val) in [
+            ("m_c", v.m_c),
+            ("j_c", v.j_c),
+            ("m_t", v.m_t),
+            ("j_t", v.j_t),
+            ("m_w", v.m_w),
+            ("k_s", v.k_s),
+            ("k_p", v.k_p),
+            ("l_c", v.l_c),
+            ("l_t", v.l_t),
+        ] {
+            positive(&format!("{p}.{name}"), val)?;
+        }
+        non_negative(&format!("{p}.c_s"), v.c_s)?;
+        non_negative(&format!("{p}.c_p"), v.c_p)?;
+        if v.l_t >= v.l_c {
+            return Err(VtbError::config(
+                format!("{p}.l_t"),
+                v.l_t,
+                format!("half wheelbase must be smaller than l_c = {}", v.l_c),
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::Vehicle;
+
+    const N_DOF: usize = 10;
+
+    pub fn set_a_trailer() -> VehicleConfig {
+        VehicleConfig {
+            m_c: 4.4e4,
+            j_c: 2.7e6,
+            m_t: 2.4e3,
+            j_t: 2.2e3,
+            m_w: 2.4e3,
+            k_s: 6.0e5,
+            c_s: 8.0e4,
+            k_p: 1.4e6,
+            c_p: 8.0e4,
+            l_c: 8.6875,
+            l_t: 1.25,
+            wheel_radius: 0.46,
+            contact_constant: None,
+            x_front: 30.0,
+            rails: 2,
+            contact_patch: false,
+            rail_crown_radius: crate::config::default_rail_crown_radius(),
+            model: crate::vehicle::VehicleKind::Car,
+        }
+    }
+
+    #[test]
+    fn stiffness_is_symmetric_and_forces_match_model_md() {
+        let v = set_a_trailer();
+        let car = Vehicle::new(&v);
+        for i in 0..N_DOF {
+            for j in 0..N_DOF {
+                assert_eq!(car.k[i * N_DOF + j], car.k[j * N_DOF + i]);
+            }
+        }
+        // Generalised force −K·z must equal the right-hand sides of docs/model.md §3.
+        let z = [
+            1.0e-3, 2.0e-4, -3.0e-4, 1.0e-3, 5.0e-4, -2.0e-3, 1.0e-4, -1.0e-4, 2.0e-4, 0.0,
+        ];
+        let fs1 = v.k_s * (z[0] - v.l_c * z[1] - z[2]);
+        let fs2 = v.k_s * (z[0] + v.l_c * z[1] - z[4]);
+        let fp = |zt: f64, bt: f64, zw: f64, s: f64| v.k_p * (zt + s * v.l_t * bt - zw);
+        let (fp1, fp2) = (fp(z[2], z[3], z[6], -1.0), fp(z[2], z[3], z[7], 1.0));
+        let (fp3, fp4) = (fp(z[4], z[5], z[8], -1.0), fp(z[4], z[5], z[9], 1.0));
+        let want = [
+            -fs1 - fs2,
+            v.l_c * (fs1 - fs2),
+            fs1 - fp1 - fp2,
+            v.l_t * (fp1 - fp2),
+            fs2 - fp3 - fp4,
+            v.l_t * (fp3 - fp4),
+            fp1,
+            fp2,
+            fp3,
+            fp4,
+        ];
+        for i in 0..N_DOF {
+            let got: f64 = -(0..N_DOF).map(|j| car.k[i * N_DOF + j] * z[j]).sum::<f64>();
+            assert!(
+                (got - want[i]).abs() < 1e-6 * want[i].abs().max(1.0),
+                "dof {i}: {got} vs {}",
+                want[i]
+            );
+        }
+    }
+
+    #[test]
+    fn static_wheel_loads_follow_from_statics() {
+        let v = set_a_trailer();
+        let car = Vehicle::new(&v);
+        let g = 9.81;
+        let (p, _) = car.static_state(g, &[1e-4, -2e-4, 3e-4, 0.0]);
+        let want = v.m_w * g + 0.5 * v.m_t * g + 0.25 * v.m_c * g;
+        for pw in p {
+            assert!((pw - want).abs() < 1e-6 * want, "{pw} vs {want}");
+        }
+        // Axle load of the set A trailer: 143.2 kN.
+        assert!((want / 1e3 - 143.2).abs() < 0.1);
+    }
+}

@@ -1,0 +1,199 @@
+//! Vehicle models (docs/vehicles.md). A model states its degrees of freedom, masses,
+//! suspension elements and wheels ([`VehicleModel`]); the engines see only the assembled linear
+//! system and its wheel ports ([`Vehicle`]). Adding a model is one file here implementing the
+//! trait and one variant of [`VehicleKind`].
+
+mod car;
+mod quarter_car;
+
+pub use car::ZhaiCar;
+pub use quarter_car::QuarterCar;
+
+use crate::config::VehicleConfig;
+use crate::error::Result;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// Which vehicle model a `VehicleConfig` describes.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default, Hash)]
+#[serde(rename_all = "snake_case")]
+pub enum VehicleKind {
+    /// Zhai's 10-DOF car: body, two bogies and four wheelsets, bounce and pitch.
+    #[default]
+    Car,
+    /// A quarter car (moving sprung mass): `m_c` on the suspension `k_p`, `c_p` over one wheel
+    /// of mass `m_w`. The bogie and pitch fields are not part of it and must be 0.
+    QuarterCar,
+}
+
+impl VehicleKind {
+    pub const ALL: [VehicleKind; 2] = [VehicleKind::Car, VehicleKind::QuarterCar];
+
+    /// The model of this kind built from `v`'s fields.
+    pub fn model(self, v: &VehicleConfig) -> Box<dyn VehicleModel + '_> {
+        match self {
+            VehicleKind::Car => Box::new(ZhaiCar(v)),
+            VehicleKind::QuarterCar => Box::new(QuarterCar(v)),
+        }
+    }
+
+    /// The DOF names (state order) and the wheel count of this kind: they do not depend on the
+    /// values, so they are read off a model with every field 0.
+    pub fn layout(self) -> (Vec<&'static str>, usize) {
+        let mut v: VehicleConfig = serde_json::from_value(serde_json::json!({
+            "m_c": 0, "j_c": 0, "m_t": 0, "j_t": 0, "m_w": 0, "k_s": 0, "c_s": 0, "k_p": 0,
+            "c_p": 0, "l_c": 0, "l_t": 0, "wheel_radius": 0, "x_front": 0,
+        }))
+        .expect("a vehicle with every field 0 deserialises");
+        v.model = self;
+        let m = self.model(&v);
+        (
+            m.dofs().iter().map(|d| d.name).collect(),
+            m.wheel_dofs().len(),
+        )
+    }
+
+    /// The name used in configurations.
+    pub fn name(self) -> &'static str {
+        match self {
+            VehicleKind::Car => "car",
+            VehicleKind::QuarterCar => "quarter_car",
+        }
+    }
+}
+
+/// One degree of freedom of a vehicle model: z positive downward, rotations positive nose-up.
+pub struct Dof {
+    pub name: &'static str,
+    /// Carries its mass's weight (a bounce DOF, not a pitch).
+    pub translational: bool,
+}
+
+/// A spring ∥ dashpot acting on the relative displacement dᵀz, so that it adds k·d·dᵀ to the
+/// stiffness and c·d·dᵀ to the damping: symmetric by construction.
+pub struct Element {
+    pub d: Vec<(usize, f64)>,
+    pub k: f64,
+    pub c: f64,
+}
+
+/// What a vehicle model states; everything else (matrices, statics, ports) follows from it.
+pub trait VehicleModel {
+    /// The DOFs, in the order of the model's state; the first is the body's bounce (the DOF the
+    /// comfort indices read).
+    fn dofs(&self) -> &'static [Dof];
+    /// The diagonal mass matrix (kg, kg·m²).
+    fn masses(&self) -> Vec<f64>;
+    /// The suspension elements.
+    fn elements(&self) -> Vec<Element>;
+    /// The DOF of each wheel in contact, front to rear.
+    fn wheel_dofs(&self) -> Vec<usize>;
+    /// Wheel positions at t = 0 (m), front to rear, for a leading wheel at `x_front`.
+    fn wheel_offsets(&self, x_front: f64) -> Vec<f64>;
+    /// Checks the fields this model reads (and that it leaves the others at 0); `p` is the
+    /// vehicle's path in the configuration.
+    fn validate(&self, p: &str) -> Result<()>;
+}
+
+/// The largest number of wheels of one vehicle (the engines' port block width).
+pub const MAX_WHEELS: usize = 4;
+
+/// A vehicle model assembled for the engines.
+#[derive(Clone, Debug)]
+pub struct Vehicle {
+    /// Diagonal mass matrix.
+    pub mass: Vec<f64>,
+    /// Stiffness and damping, row-major n×n.
+    pub k: Vec<f64>,
+    pub c: Vec<f64>,
+    /// Weight-carrying DOFs.
+    translational: Vec<bool>,
+    /// The DOF of each wheel, front to rear.
+    pub wheel_dofs: Vec<usize>,
+    /// Hertz constant G (m/N^(2/3)).
+    pub hertz_g: f64,
+    /// Wheel positions at t = 0, front to rear.
+    pub wheel_x0: Vec<f64>,
+    /// Rails sharing each axle load: a wheel receives `rails`·P for a modelled contact force P.
+    pub rails: f64,
+}
+
+impl Vehicle {
+    pub fn new(v: &VehicleConfig) -> Self {
+        let model = v.model.model(v);
+        let mass = model.masses();
+        let n = mass.len();
+        let (mut k, mut c) = (vec![0.0; n * n], vec![0.0; n * n]);
+        for e in model.elements() {
+            for &(i, a) in &e.d {
+                for &(j, b) in &e.d {
+                    k[i * n + j] += e.k * a * b;
+                    c[i * n + j] += e.c * a * b;
+                }
+            }
+        }
+        Self {
+            mass,
+            k,
+            c,
+            translational: model.dofs().iter().map(|d| d.translational).collect(),
+            wheel_dofs: model.wheel_dofs(),
+            hertz_g: v.hertz_constant(),
+            wheel_x0: model.wheel_offsets(v.x_front),
+            rails: v.rails as f64,
+        }
+    }
+
+    pub fn n_dofs(&self) -> usize {
+        self.mass.len()
+    }
+
+    pub fn n_wheels(&self) -> usize {
+        self.wheel_dofs.len()
+    }
+
+    /// Gravity load vector m·g on the translational DOFs.
+    pub fn gravity(&self, g: f64) -> Vec<f64> {
+        self.mass
+            .iter()
+            .zip(&self.translational)
+            .map(|(m, &t)| if t { m * g } else { 0.0 })
+            .collect()
+    }
+
+    /// Static wheel loads (N) and the whole static state for given wheel displacements `z_w`:
+    /// the wheels held at `z_w`, the other DOFs solve K_ff·z_f = F_f − K_fw·z_w and the wheel
+    /// loads are the reactions F_w − K_w·z. For a statically determinate vehicle (both models
+    /// here) the loads do not depend on `z_w`.
+    pub fn static_state(&self, g: f64, z_w: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = self.n_dofs();
+        let f = self.gravity(g);
+        let free: Vec<usize> = (0..n).filter(|i| !self.wheel_dofs.contains(i)).collect();
+        let mut z = vec![0.0; n];
+        for (&d, &zw) in self.wheel_dofs.iter().zip(z_w) {
+            z[d] = zw;
+        }
+        let kff: Vec<f64> = free
+            .iter()
+            .flat_map(|&i| free.iter().map(move |&j| (i, j)))
+            .map(|(i, j)| self.k[i * n + j])
+            .collect();
+        let rhs: Vec<f64> = free
+            .iter()
+            .map(|&i| f[i] - (0..n).map(|j| self.k[i * n + j] * z[j]).sum::<f64>())
+            .collect();
+        // K_ff (the suspensions with the wheels held) is positive definite for validated
+        // springs; parameters of extreme magnitude give NaN, which the run reports.
+        let zf =
+            crate::linalg::dense::solve(&kff, &rhs).unwrap_or_else(|| vec![f64::NAN; free.len()]);
+        for (&i, zi) in free.iter().zip(zf) {
+            z[i] = zi;
+        }
+        let p = self
+            .wheel_dofs
+            .iter()
+            .map(|&i| f[i] - (0..n).map(|j| self.k[i * n + j] * z[j]).sum::<f64>())
+            .collect();
+        (p, z)
+    }
+}
