@@ -1,0 +1,213 @@
+//! Runs: one configuration, a batch of many, and the shared modal reduction.
+
+use crate::convert::{make_profile, parse_config, result_to_dict};
+use crate::detach::run_detached;
+use crate::errors::{make_exception, to_py_err};
+use numpy::PyReadonlyArray1;
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::sync::{Arc, Mutex};
+use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
+
+/// A structure's complex-modal reduction held by the core (built by `vtb.synthesis`): the
+/// arrays are converted once and shared by every run that is given it.
+#[pyclass(frozen, module = "vtb._core")]
+pub(crate) struct Reduction(Arc<vtb::synthesis::Reduction>);
+
+#[pymethods]
+impl Reduction {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        n_dofs: usize,
+        lambda_re: PyReadonlyArray1<'_, f64>,
+        lambda_im: PyReadonlyArray1<'_, f64>,
+        weight: PyReadonlyArray1<'_, f64>,
+        psi_re: PyReadonlyArray1<'_, f64>,
+        psi_im: PyReadonlyArray1<'_, f64>,
+        rail_dofs: usize,
+        band: usize,
+        residual: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let v = |a: PyReadonlyArray1<'_, f64>| a.as_array().to_vec();
+        vtb::synthesis::Reduction::new(
+            n_dofs,
+            v(lambda_re),
+            v(lambda_im),
+            v(weight),
+            v(psi_re),
+            v(psi_im),
+            rail_dofs,
+            band,
+            v(residual),
+        )
+        .map(|r| Self(Arc::new(r)))
+        .map_err(|e| to_py_err(py, e))
+    }
+
+    #[getter]
+    fn n_modes(&self) -> usize {
+        self.0.n_modes()
+    }
+
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.0.bytes()
+    }
+
+    /// The reduction's static flexibility sᵀK⁻¹s at rail shapes (start, values) pairs.
+    fn static_flexibility(&self, start: usize, values: Vec<f64>) -> f64 {
+        let s = vtb::basis::Shape { start, values };
+        self.0.static_flexibility(&s, &s)
+    }
+}
+
+/// Runs one configuration; returns a dict of histories and metrics. `progress(done, total)`
+/// (steps) is called from the calling thread every 50 ms while it runs.
+#[pyfunction]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, treads=Vec::new(), reduction=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    profile_x0: f64,
+    profile_dx: f64,
+    profile: Option<PyReadonlyArray1<'_, f64>>,
+    treads: Vec<PyReadonlyArray1<'_, f64>>,
+    reduction: Option<&Reduction>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let p = make_profile(profile_x0, profile_dx, profile, treads)?;
+    let red = reduction.map(|r| Arc::clone(&r.0));
+    let out = run_detached(
+        py,
+        |_, control| match &progress {
+            Some(f) => f.call1(control.progress()).map(|_| ()),
+            None => Ok(()),
+        },
+        |control| vtb::simulate_with(&cfg, &p, red.as_deref(), Some(control)),
+    )?;
+    let r = out.map_err(|e| to_py_err(py, e))?;
+    result_to_dict(py, r)
+}
+
+/// Runs many configurations in parallel (rayon, `threads` workers, all cores when 0; jobs of
+/// one model in lockstep groups) and returns, in order, each run's metrics dict (or with
+/// `histories`, its full result dict) or its (unraised) exception. `profiles` are
+/// (x0, dx, values, treads) shared by index through `profile_index`. From the calling thread,
+/// as each lockstep group finishes: `on_result(i, item)` for each of its runs (i indexes
+/// `configs`), then `progress(done)`.
+#[pyfunction]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES, reduction=None, on_result=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn batch<'py>(
+    py: Python<'py>,
+    configs: Vec<String>,
+    profiles: Vec<(
+        f64,
+        f64,
+        Option<PyReadonlyArray1<'_, f64>>,
+        Vec<PyReadonlyArray1<'_, f64>>,
+    )>,
+    profile_index: Vec<usize>,
+    threads: usize,
+    progress: Option<Bound<'py, PyAny>>,
+    histories: bool,
+    max_lanes: usize,
+    reduction: Option<&Reduction>,
+    on_result: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let red = reduction.map(|r| Arc::clone(&r.0));
+    if configs.len() != profile_index.len() {
+        return Err(to_py_err(
+            py,
+            VtbError::config(
+                "profile_index",
+                profile_index.len(),
+                format!("needs one entry per config ({})", configs.len()),
+            ),
+        ));
+    }
+    let shared: Vec<Arc<Profile>> = profiles
+        .into_iter()
+        .map(|(x0, dx, v, t)| make_profile(x0, dx, v, t).map(Arc::new))
+        .collect::<PyResult<_>>()?;
+    let mut jobs = Vec::with_capacity(configs.len());
+    let mut items: Vec<Option<Bound<'py, PyAny>>> = vec![None; configs.len()];
+    // The configuration each job runs (parse errors are results of their own).
+    let mut job_config = Vec::with_capacity(configs.len());
+    for (i, (text, &pi)) in configs.iter().zip(&profile_index).enumerate() {
+        let profile = shared.get(pi).cloned().ok_or_else(|| {
+            to_py_err(
+                py,
+                VtbError::config(
+                    format!("profile_index[{i}]"),
+                    pi,
+                    format!("only {} profiles given", shared.len()),
+                ),
+            )
+        })?;
+        match Config::from_json(text) {
+            Ok(config) => {
+                jobs.push(Job { config, profile });
+                job_config.push(i);
+            }
+            Err(e) => items[i] = Some(make_exception(py, &e)?),
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let finished: Mutex<Vec<(usize, vtb::Result<RunResult>)>> = Mutex::new(Vec::new());
+    let mut done = 0;
+    let tick = |py: Python<'py>, _: &vtb::Control| -> PyResult<()> {
+        let ready = std::mem::take(&mut *finished.lock().unwrap_or_else(|e| e.into_inner()));
+        if ready.is_empty() {
+            return Ok(());
+        }
+        for (j, r) in ready {
+            let i = job_config[j];
+            let item = match r {
+                Ok(r) if histories => result_to_dict(py, r)?.into_any(),
+                Ok(r) => r.metrics().into_pyobject(py)?.into_any(),
+                Err(VtbError::Cancelled) => {
+                    return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"));
+                }
+                Err(e) => make_exception(py, &e)?,
+            };
+            if let Some(cb) = &on_result {
+                cb.call1((i, &item))?;
+            }
+            items[i] = Some(item);
+            done += 1;
+        }
+        if let Some(cb) = &progress {
+            cb.call1((done,))?;
+        }
+        Ok(())
+    };
+    run_detached(py, tick, |cancel| {
+        let record = if histories {
+            Record::Full
+        } else {
+            Record::Metrics
+        };
+        let opts = BatchOptions { record, max_lanes };
+        let sink = |mut group: Vec<(usize, vtb::Result<RunResult>)>| {
+            finished
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .append(&mut group);
+        };
+        pool.install(|| vtb::run_batch_each(&jobs, opts, red.as_deref(), Some(cancel), &sink))
+    })?;
+    let out = PyList::empty(py);
+    for item in items {
+        out.append(item.expect("every configuration has a result"))?;
+    }
+    Ok(out)
+}

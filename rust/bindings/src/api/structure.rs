@@ -1,0 +1,205 @@
+//! The assembled structure and what it resolves: matrices, shapes, the FE–SEA data, the
+//! resolved bands, the contact patch.
+
+use crate::convert::parse_config;
+use crate::errors::to_py_err;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use vtb::{Profile, VtbError};
+
+/// The assembled structure matrices M, K, C of a configuration as COO triplets
+/// (rows, cols, values) with their dimension, plus each layer's DOF offset.
+#[pyfunction]
+pub(crate) fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let st = &model.structure;
+    let d = PyDict::new(py);
+    d.set_item("n", st.n_dofs)?;
+    for (name, m) in [("m", &st.m), ("k", &st.k), ("c", &st.c)] {
+        let mut rows = Vec::with_capacity(m.nnz());
+        for i in 0..m.n {
+            rows.extend(std::iter::repeat_n(
+                i as i64,
+                m.row_ptr[i + 1] - m.row_ptr[i],
+            ));
+        }
+        let cols: Vec<i64> = m.col_idx.iter().map(|&c| c as i64).collect();
+        d.set_item(
+            name,
+            (
+                PyArray1::from_vec(py, rows),
+                PyArray1::from_vec(py, cols),
+                PyArray1::from_vec(py, m.values.clone()),
+            ),
+        )?;
+    }
+    d.set_item(
+        "layer_offsets",
+        st.layers
+            .iter()
+            .map(|l| (l.name.clone(), l.offset, l.n_dofs()))
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(d)
+}
+
+/// Shape vectors of layer `layer` (index, top = 0) at the positions `xs` (m), in the
+/// structure's DOF numbering: (starts, values) with values of shape (len(xs), width); row i is
+/// nonzero on the DOFs starts[i] .. starts[i] + width. The hybrid rail's vectors carry the
+/// FE–SEA correction, exactly as the wheels and the outputs see them.
+#[pyfunction]
+pub(crate) fn shapes<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    layer: usize,
+    xs: PyReadonlyArray1<'_, f64>,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let st = &model.structure;
+    if layer >= st.layers.len() {
+        return Err(to_py_err(
+            py,
+            VtbError::config("layer", layer, "no such layer index"),
+        ));
+    }
+    let xs = xs
+        .as_slice()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let width = st.layers[layer].basis.shape_len();
+    let mut starts = Vec::with_capacity(xs.len());
+    let mut values = Vec::with_capacity(xs.len() * width);
+    for (i, &x) in xs.iter().enumerate() {
+        let (a, b) = st.layers[layer].extent();
+        if !(x.is_finite() && (a..=b).contains(&x)) {
+            return Err(to_py_err(
+                py,
+                VtbError::config(
+                    &format!("x[{i}]"),
+                    x,
+                    format!(
+                        "must lie on layer {:?}, {a} ≤ x ≤ {b}",
+                        st.layers[layer].name
+                    ),
+                ),
+            ));
+        }
+        let s = st.shape(layer, x);
+        starts.push(s.start as i64);
+        values.extend_from_slice(&s.values);
+    }
+    let values = PyArray1::from_vec(py, values).reshape([xs.len(), width])?;
+    Ok((PyArray1::from_vec(py, starts), values))
+}
+
+/// The FE–SEA correction of a hybrid configuration: ω_r, the resonant band, the modal
+/// density, ΔM/ΔK/ΔC on the rail's cubic DOFs and every local mode's properties.
+#[pyfunction]
+pub(crate) fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = parse_config(py, config_json)?;
+    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let Some(fs) = &model.structure.fesea else {
+        return Err(to_py_err(
+            py,
+            VtbError::config(
+                "discretisation.method",
+                format!("{:?}", model.cfg.discretisation.method).to_lowercase(),
+                "the FE–SEA correction exists for the hybrid method only",
+            ),
+        ));
+    };
+    let d = PyDict::new(py);
+    d.set_item("coupling", format!("{:?}", fs.coupling).to_lowercase())?;
+    d.set_item("omega_r", fs.omega_r)?;
+    d.set_item("band", fs.band)?;
+    d.set_item("modal_density", fs.modal_density())?;
+    d.set_item("dofs", fs.dofs.to_vec())?;
+    for (name, m) in [
+        ("delta_m", &fs.delta_m),
+        ("delta_k", &fs.delta_k),
+        ("delta_c", &fs.delta_c),
+    ] {
+        d.set_item(name, m.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?;
+    }
+    let modes = PyDict::new(py);
+    let col =
+        |f: &dyn Fn(&vtb::fesea::LocalMode) -> f64| fs.modes.iter().map(f).collect::<Vec<f64>>();
+    modes.set_item(
+        "index",
+        fs.modes.iter().map(|m| m.index as i64).collect::<Vec<_>>(),
+    )?;
+    modes.set_item("frequency", PyArray1::from_vec(py, col(&|m| m.frequency)))?;
+    modes.set_item("omega", PyArray1::from_vec(py, col(&|m| m.omega)))?;
+    modes.set_item("mass", PyArray1::from_vec(py, col(&|m| m.mass)))?;
+    modes.set_item("stiffness", PyArray1::from_vec(py, col(&|m| m.stiffness)))?;
+    modes.set_item("damping", PyArray1::from_vec(py, col(&|m| m.damping)))?;
+    modes.set_item(
+        "loss_factor",
+        PyArray1::from_vec(py, col(&|m| m.loss_factor)),
+    )?;
+    modes.set_item(
+        "class",
+        fs.modes
+            .iter()
+            .map(|m| format!("{:?}", m.class).to_lowercase())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item("modes", modes)?;
+    Ok(d)
+}
+
+/// The band each layer of a configuration resolves (`vtb::resolution`): a list of dicts
+/// (layer, f_max, basis_f_max, time_f_max in Hz; shortest_wavelength in m), top layer first,
+/// and the top layer's pinned–pinned frequency (Hz, or None).
+#[pyfunction]
+pub(crate) fn resolved_bands<'py>(
+    py: Python<'py>,
+    config_json: &str,
+) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
+    let cfg = parse_config(py, config_json)?;
+    cfg.validate(&Profile::flat())
+        .map_err(|e| to_py_err(py, e))?;
+    let out = PyList::empty(py);
+    for b in vtb::resolution::resolved_bands(&cfg) {
+        let d = PyDict::new(py);
+        d.set_item("layer", b.layer)?;
+        d.set_item("f_max", b.f_max)?;
+        d.set_item("basis_f_max", b.basis_f_max)?;
+        d.set_item("time_f_max", b.time_f_max)?;
+        d.set_item("shortest_wavelength", b.shortest_wavelength)?;
+        out.append(d)?;
+    }
+    Ok((out, vtb::resolution::pinned_pinned_frequency(&cfg)))
+}
+
+/// Half-length (m) along the rail of the Hertz contact patch of a steel wheel of rolling
+/// radius `wheel_radius` (m) on a steel rail head of crown radius `rail_radius` (m) under
+/// `load` (N) (`vtb::contact::patch_half_length`).
+#[pyfunction]
+pub(crate) fn patch_half_length(
+    py: Python<'_>,
+    load: f64,
+    wheel_radius: f64,
+    rail_radius: f64,
+) -> PyResult<f64> {
+    for (field, v) in [
+        ("load", load),
+        ("wheel_radius", wheel_radius),
+        ("rail_crown_radius", rail_radius),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(to_py_err(
+                py,
+                VtbError::config(field, format!("{v:?}"), "must be a finite number > 0"),
+            ));
+        }
+    }
+    Ok(vtb::contact::patch_half_length(
+        load,
+        wheel_radius,
+        rail_radius,
+    ))
+}
