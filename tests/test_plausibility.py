@@ -73,3 +73,21 @@ def test_docs_list_the_cores_table():
     text = (Path(__file__).parents[1] / "docs" / "limits.md").read_text()
     for r in ROWS:
         assert re.search(rf"\| `{re.escape(r['field'])}` \| {re.escape(format(r['min'], 'g'))} \| {re.escape(format(r['max'], 'g'))} \| {re.escape(r['unit'])} \|", text), r["field"]
+
+
+def test_a_misspelled_accept_implausible_entry_is_refused_by_name():
+    c = vtb.paper_config()
+    c.accept_implausible = ["speed", "speeed"]
+    with pytest.raises(vtb.ConfigError, match=r"accept_implausible\[1\].*names no field"):
+        vtb.simulate(c)
+
+
+def test_damping_in_percent_and_dashpots_in_kn_are_named():
+    c = vtb.paper_config()
+    c.structure.layers[0].damping.ratio = 1.0  # 1 %
+    with pytest.raises(vtb.ConfigError, match=r"structure\.layers\[0\]\.damping\.ratio.*in %, that is 0\.01"):
+        vtb.simulate(c)
+    c = vtb.paper_config()
+    c.vehicles[0].c_s = 80.0  # kN·s/m
+    with pytest.raises(vtb.ConfigError, match=r"vehicles\[0\]\.c_s.*kN·s/m, that is 80000"):
+        vtb.simulate(c)

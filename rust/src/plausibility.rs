@@ -23,6 +23,18 @@ fn layers(c: &Config, f: fn(&crate::config::LayerConfig) -> f64) -> Vec<f64> {
     c.structure.layers.iter().map(f).collect()
 }
 
+fn layers_ratio(c: &Config) -> Vec<f64> {
+    // Every layer keeps its index in the path: coefficients (α, β) give NaN, which is skipped.
+    c.structure
+        .layers
+        .iter()
+        .map(|l| match l.damping {
+            crate::config::RayleighConfig::Ratio { ratio, .. } => ratio,
+            crate::config::RayleighConfig::Coefficients { .. } => f64::NAN,
+        })
+        .collect()
+}
+
 fn couplings(
     c: &Config,
     kind: CouplingKind,
@@ -115,6 +127,30 @@ pub const RANGES: &[Range] = &[
         get: |c| couplings(c, CouplingKind::Continuous, |cp| cp.stiffness),
     },
     Range {
+        field: "structure.couplings[*].damping (discrete)",
+        min: 10.0,
+        max: 1e7,
+        unit: "N·s/m",
+        covers: "rail pads and bearings",
+        get: |c| couplings(c, CouplingKind::Discrete, |cp| cp.damping),
+    },
+    Range {
+        field: "structure.couplings[*].damping (continuous)",
+        min: 10.0,
+        max: 1e8,
+        unit: "N·s/m²",
+        covers: "mortar, subgrade and bearing layers",
+        get: |c| couplings(c, CouplingKind::Continuous, |cp| cp.damping),
+    },
+    Range {
+        field: "structure.layers[*].damping.ratio",
+        min: 1e-4,
+        max: 0.5,
+        unit: "–",
+        covers: "structural damping ratios",
+        get: |c| layers_ratio(c),
+    },
+    Range {
         field: "vehicles[*].m_c",
         min: 1e3,
         max: 2e5,
@@ -163,6 +199,46 @@ pub const RANGES: &[Range] = &[
         get: |c| vehicles(c, |v| v.k_p),
     },
     Range {
+        field: "vehicles[*].j_t",
+        min: 100.0,
+        max: 5e4,
+        unit: "kg·m²",
+        covers: "bogie pitch inertia",
+        get: |c| vehicles(c, |v| v.j_t),
+    },
+    Range {
+        field: "vehicles[*].c_s",
+        min: 1e3,
+        max: 1e6,
+        unit: "N·s/m",
+        covers: "secondary dampers",
+        get: |c| vehicles(c, |v| v.c_s),
+    },
+    Range {
+        field: "vehicles[*].c_p",
+        min: 1e3,
+        max: 1e6,
+        unit: "N·s/m",
+        covers: "primary dampers",
+        get: |c| vehicles(c, |v| v.c_p),
+    },
+    Range {
+        field: "vehicles[*].l_c",
+        min: 1.0,
+        max: 15.0,
+        unit: "m",
+        covers: "half the distance between bogie centres",
+        get: |c| vehicles(c, |v| v.l_c),
+    },
+    Range {
+        field: "vehicles[*].l_t",
+        min: 0.5,
+        max: 2.5,
+        unit: "m",
+        covers: "half bogie wheelbases",
+        get: |c| vehicles(c, |v| v.l_t),
+    },
+    Range {
         field: "vehicles[*].wheel_radius",
         min: 0.15,
         max: 0.8,
@@ -203,6 +279,22 @@ pub const RANGES: &[Range] = &[
         get: |c| dampers(c, |t| t.stiffness),
     },
     Range {
+        field: "tids.damping",
+        min: 1e-2,
+        max: 1e7,
+        unit: "N·s/m",
+        covers: "damper dashpots",
+        get: |c| tids(c, |t| t.damping),
+    },
+    Range {
+        field: "dampers[*].damping",
+        min: 1e-2,
+        max: 1e7,
+        unit: "N·s/m",
+        covers: "damper dashpots",
+        get: |c| dampers(c, |t| t.damping),
+    },
+    Range {
         field: "solver.dt",
         min: 1e-7,
         max: 1e-2,
@@ -228,6 +320,9 @@ fn hint(r: &Range, v: f64) -> String {
         "m" => &[(1e-3, "mm")],
         "m²" => &[(1e-4, "cm²"), (1e-6, "mm²")],
         "m⁴" => &[(1e-8, "cm⁴")],
+        "–" => &[(1e-2, "%")],
+        "N·s/m" => &[(1e3, "kN·s/m")],
+        "N·s/m²" => &[(1e3, "kN·s/m²")],
         _ => &[],
     };
     let fits: Vec<String> = tries
@@ -246,6 +341,21 @@ fn hint(r: &Range, v: f64) -> String {
 /// in `accept_implausible` (zero, negative and non-finite values are left to the field's own
 /// checks).
 pub fn check(cfg: &Config) -> Result<()> {
+    // An entry that names no field of the table would silently accept nothing: a typo.
+    let known: Vec<String> = RANGES
+        .iter()
+        .flat_map(|r| (0..(r.get)(cfg).len()).map(move |i| path(r.field, i)))
+        .collect();
+    for (j, a) in cfg.accept_implausible.iter().enumerate() {
+        if !known.contains(a) {
+            return Err(VtbError::config(
+                format!("accept_implausible[{j}]"),
+                a,
+                "names no field of the plausibility table in this configuration (docs/limits.md; \
+                 e.g. \"speed\", \"vehicles[0].m_c\", \"structure.couplings[1].stiffness\")",
+            ));
+        }
+    }
     for r in RANGES {
         for (i, v) in (r.get)(cfg).into_iter().enumerate() {
             if !v.is_finite()
