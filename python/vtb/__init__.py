@@ -43,7 +43,7 @@ from .trains import TrainInfo, consist_extent, train, trains
 from .zones import bridge_extent, track_zones
 from .optimize import OptimizationResult, ParetoResult, optimize
 from .robust import DesignEvaluation, evaluate_design, evaluate_designs
-from .tables import metrics_table, read_parquet
+from .tables import metrics_table, read_parquet, to_parquet
 from .config import plausible_ranges
 
 __all__ = [
@@ -53,6 +53,6 @@ __all__ = [
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
-    "metrics_table", "read_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
+    "metrics_table", "read_parquet", "to_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
     "train", "trains", "TrainInfo", "consist_extent", "track_zones", "bridge_extent",
 ]

@@ -28,14 +28,31 @@ def frame(columns, units: dict | None = None):
     return df
 
 
-def to_parquet(df, path) -> None:
-    """Writes ``df`` to ``path`` as Parquet (pyarrow), its units in the file's key–value
-    metadata under ``vtb.units``; :func:`read_parquet` reads both back."""
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-    except ImportError:
-        raise VtbError("Parquet export needs pyarrow: pip install 'vtb[io]'") from None
+def to_parquet(data, path) -> None:
+    """Writes a table of results to ``path`` as one Parquet file (pyarrow, the ``io`` extra).
+
+    ``data``: a :class:`pandas.DataFrame` (e.g. :func:`metrics_table`, or any result's
+    ``to_pandas()``); a batch — the list :func:`vtb.simulate_batch` returns, or a list of
+    :class:`vtb.Result` — written as its :func:`metrics_table`, one row per run (a failed job
+    keeps its ``error``); or any vtb result with a ``to_pandas()`` (:class:`vtb.Result`'s
+    histories, :class:`vtb.StudyResult`, :class:`vtb.SweepResult`,
+    :class:`vtb.OptimizationResult`, …), written as that frame. Their own ``.to_parquet(path)``
+    methods call this function.
+
+    Units: values are SI; ``df.attrs["units"]`` (``{column: unit}``, e.g. ``"m/s²"``, ``"–"``
+    for ratios and counts, text and flag columns left out) is stored as JSON in the file's key–value
+    metadata under ``vtb.units``. A named index (e.g. ``t`` of the histories) is written as a
+    column and restored. :func:`read_parquet` reads values and units back exactly."""
+    pd = _pandas()
+    if isinstance(data, (list, tuple)):
+        df = metrics_table(data)
+    elif isinstance(data, pd.DataFrame):
+        df = data
+    elif callable(getattr(data, "to_pandas", None)):
+        df = data.to_pandas()
+    else:
+        raise config_error("data", type(data).__name__, "expected a pandas DataFrame, a batch (list of results or metrics dicts) or a vtb result with to_pandas()")
+    pa, pq = _pyarrow()
     path = Path(path)
     if path.is_dir():
         raise config_error("path", str(path), "is a directory, not a file")
@@ -45,10 +62,19 @@ def to_parquet(df, path) -> None:
     pq.write_table(table.replace_schema_metadata(meta), str(path))
 
 
-def read_parquet(path):
-    """A DataFrame written by :func:`to_parquet`, with its ``attrs["units"]``."""
-    import pyarrow.parquet as pq
+def _pyarrow():
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise VtbError("Parquet export needs pyarrow: pip install 'vtb[io]'") from None
+    return pa, pq
 
+
+def read_parquet(path):
+    """A DataFrame written by :func:`to_parquet` (or any ``.to_parquet`` of a vtb result),
+    with its units back in ``attrs["units"]`` (``{}`` for a file without them)."""
+    _, pq = _pyarrow()
     table = pq.read_table(str(path))
     df = table.to_pandas()
     raw = (table.schema.metadata or {}).get(b"vtb.units")
@@ -78,24 +104,34 @@ def metrics_table(results: Sequence):
 
 
 #: Units of the design and case columns of the studies' tables.
-STUDY_UNITS = {"b_t": "kg", "k_t": "N/m", "c_t": "N·s/m", "speed": "m/s", "seed": "–", "case": "–", "sample": "–"}
+STUDY_UNITS = {"b_t": "kg", "k_t": "N/m", "c_t": "N·s/m", "speed": "m/s", "seed": "–", "case": "–", "sample": "–",
+               "tids.inertance": "kg", "tids.stiffness": "N/m", "tids.damping": "N·s/m",
+               "tids.b_t": "kg", "tids.k_t": "N/m", "tids.c_t": "N·s/m", "irregularity.seed": "–"}
 
 
 def units_of(names) -> dict:
     """The unit of every column name a study table may hold: design and case columns, metrics
-    (:func:`vtb.metric_unit`), reduction rates ``eta_*`` (–); others (text) are left out."""
+    (:func:`vtb.metric_unit`), a metric's uncontrolled value ``<metric>_0`` (its unit),
+    reduction rates ``eta_*`` and the robust studies' ratios X/X0 ``ratio_*``, ``mean_*``,
+    ``sem_*`` (–); others (text, flags) are left out."""
     from .errors import ConfigError
     from .simulate import metric_unit
 
+    def unit(name):
+        try:
+            return metric_unit(name)
+        except ConfigError:
+            return None
+
     out = {}
     for n in names:
+        ratio = n.partition("_")[2] if n.startswith(("ratio_", "mean_", "sem_")) else None
         if n in STUDY_UNITS:
             out[n] = STUDY_UNITS[n]
-        elif n.startswith("eta_") or n == "satisfaction_rate":
+        elif n.startswith("eta_") or n == "satisfaction_rate" or (ratio and unit(ratio)):
             out[n] = "–"
-        else:
-            try:
-                out[n] = metric_unit(n)
-            except ConfigError:
-                pass
+        elif n.endswith("_0") and unit(n[:-2]):
+            out[n] = unit(n[:-2])
+        elif unit(n):
+            out[n] = unit(n)
     return out
