@@ -44,21 +44,26 @@ def main(argv=None):
     if args.out:
         from pathlib import Path
 
-        from matplotlib.figure import Figure
+        import matplotlib
 
-        fig = Figure(figsize=(6, 3.5), layout="constrained")
-        ax = fig.subplots()
-        ax.plot(SPEEDS, [r.metrics()["rail_acc_max"] for r in results], "o-", label="rail $a_{rm}$")
-        ax.plot(SPEEDS, [r.metrics()["slab_acc_max"] for r in results], "s--", label="slab $a_{sm}$")
-        ax.set_yscale("log")
-        ax.set_xlabel("speed $v$ (m/s)")
-        ax.set_ylabel("acceleration amplitude (m/s²)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
+        from vtb import plotting
+
+        # One journal column (85 mm) in the package's type sizes (vtb.plotting).
+        with matplotlib.rc_context(plotting.STYLE):
+            fig = plotting.figure(height_mm=55)
+            ax = fig.subplots()
+            ax.plot(SPEEDS, [r.metrics()["rail_acc_max"] for r in results], "o-", color="k", lw=0.8, label="rail $a_{rm}$")
+            ax.plot(SPEEDS, [r.metrics()["slab_acc_max"] for r in results], "s--", color="C0", label="slab $a_{sm}$")
+            ax.set_yscale("log")
+            ax.set_xlabel("speed $v$ (m/s)")
+            ax.set_ylabel("acceleration amplitude (m/s²)")
+            ax.grid(True, which="both", alpha=0.3)
+            plotting.plain_log_ticks(ax, "y")
+            plotting.legend_above(fig, ax)
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         for suffix in ("png", "pdf"):
-            fig.savefig(out / f"fig_speed_study.{suffix}", dpi=150)
+            fig.savefig(out / f"fig_speed_study.{suffix}", dpi=plotting.STYLE["savefig.dpi"])
 
 
 if __name__ == "__main__":
