@@ -3,7 +3,7 @@ on the calibrated article case (``paper_config(calibrated=True)``, the one `vtb 
 ``--uncalibrated`` for the raw TB/T 3352 level; ``--model fast`` on the fast converged model,
 the synthesis of the converged finite elements, docs/synthesis.md).
 
-    python benches/bench_sweep.py [--out benches/results/sweep_article.csv] [--report docs/sweep.md]
+    python benches/bench_sweep.py [--out benches/results/sweep_article.csv] [--report benches/results/sweep.md]
     python benches/bench_sweep.py --model fast --fresh --out benches/results/sweep_fast.csv --report benches/results/sweep_fast.md
 
 Resumable (the CSV journal); the wall time printed is that of this invocation, so a fresh
@@ -19,7 +19,7 @@ from vtb.tid_sweep import sweep_report
 
 p = argparse.ArgumentParser()
 p.add_argument("--out", default="benches/results/sweep_article.csv")
-p.add_argument("--report", default="docs/sweep.md")
+p.add_argument("--report", default="benches/results/sweep.md")
 p.add_argument("--fresh", action="store_true", help="delete the journal first")
 p.add_argument("--uncalibrated", action="store_true", help="the raw irregularity level")
 p.add_argument("--model", default="article", choices=["article", "fast"], help="the discretisation (vtb.paper_config's model)")
