@@ -209,6 +209,22 @@ def test_warm_start_of_another_configuration_or_a_bad_journal_is_refused(short, 
     assert e.value.field == "warm_start"
 
 
+def test_a_journal_computed_by_other_numerics_is_stale(short, swept):
+    """A journal whose uncontrolled run no longer equals a fresh one (written by another vtb
+    version) is a StaleFileError naming the journal, which --force sets aside and reruns; the
+    same sweep held in memory only is a plain ConfigError."""
+    sw = vtb.tid_sweep.read_journal(swept)
+    assert sw.journal == str(swept)
+    sw.columns["rail_acc_max"][0] *= 1.0 + 1e-12  # the baseline of other numerics
+    with pytest.raises(vtb.StaleFileError, match="differs") as e:
+        vtb.optimize(short, pop_size=4, n_gen=1, progress=False, warm_start=sw)
+    assert e.value.path == str(swept)
+    sw.journal = None
+    with pytest.raises(vtb.ConfigError, match="differs") as e:
+        vtb.optimize(short, pop_size=4, n_gen=1, progress=False, warm_start=sw)
+    assert not isinstance(e.value, vtb.StaleFileError)
+
+
 def test_optimize_command_warm_start_stop_and_checkpoint(short, tmp_path, capsys):
     """vtb sweep, then vtb optimize warm-started from its journal with a checkpoint; the same
     command again finds the finished checkpoint and evaluates nothing."""

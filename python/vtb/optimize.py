@@ -368,7 +368,10 @@ def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config,
     if config_stamp(sw.config) != config_stamp(config):
         raise config_error("warm_start", label, "is a sweep of another configuration")
     if sw.baseline != {m: baseline[m] for m in METRICS}:
-        raise config_error("warm_start", label, "its uncontrolled run differs from this configuration's (a sweep computed by another vtb version?)")
+        reason = "its uncontrolled run differs from this configuration's (a sweep computed by another vtb version?)"
+        if sw.journal is not None:  # the journal's results are stale: --force sets it aside and reruns it
+            raise stale_file_error("warm_start", sw.journal, reason)
+        raise config_error("warm_start", label, reason)
     c, ok = sw.columns, np.flatnonzero(sw.controlled)
     X = np.column_stack([c["b_t"][ok], c["k_t"][ok], c["c_t"][ok]])
     metrics = [{m: float(c[m][i]) for m in METRICS} for i in ok]

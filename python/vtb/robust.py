@@ -414,7 +414,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                     report(done, total)
 
             run_cases([case_config(st[2], c["b_t"], c["k_t"], c["c_t"]) for st, c in jobs], finished, executor=executor, threads=threads, chunk=chunk)
-    return RobustSweep([(v, s, result_of(rows, cfg, tid_sweep.LAYOUT, tid_sweep.SweepResult)) for v, s, cfg, _, rows, _ in state], statistic_name, config)
+    return RobustSweep([(v, s, result_of(rows, cfg, tid_sweep.LAYOUT, tid_sweep.SweepResult, journal=j)) for v, s, cfg, j, rows, _ in state], statistic_name, config)
 
 
 # ---------------------------------------------------------------------- robust optimisation

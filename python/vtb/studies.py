@@ -120,12 +120,14 @@ class StudyResult:
     """A finished study: numpy ``columns`` — ``case`` (0: the reference case, if any, with NaN
     variables), one per variable (labelled as given), one per index (SI units, NaN where the
     case failed, :func:`vtb.metric_unit`) and ``error`` (empty, or the failure) —, the
-    ``variables`` and ``indices`` in order, and the studied ``config``."""
+    ``variables`` and ``indices`` in order, and the studied ``config``; ``journal``: the journal
+    file its cases were read from or written to (None without one)."""
 
     columns: dict
     config: Config
     variables: tuple = ()
     indices: tuple = ()
+    journal: Optional[str] = None
 
     def __len__(self) -> int:
         return len(self.columns["case"])
@@ -186,13 +188,14 @@ def rows_of(cases: list, results: list, layout: jr.Layout) -> list:
     return rows
 
 
-def result_of(rows: list, config: Config, layout: jr.Layout, cls=StudyResult):
-    """Rows as a result (ordered by case)."""
+def result_of(rows: list, config: Config, layout: jr.Layout, cls=StudyResult, journal=None):
+    """Rows as a result (ordered by case), kept with their ``journal`` file if any."""
     rows = sorted(rows, key=lambda r: r["case"])
     cols = ("case",) + layout.columns
     columns = {k: np.array([r[k] for r in rows], dtype=str if k == "error" else float) for k in cols}
     columns["case"] = columns["case"].astype(int)
-    return cls(columns=columns, config=config, variables=tuple(layout.keys), indices=tuple(layout.values))
+    return cls(columns=columns, config=config, variables=tuple(layout.keys), indices=tuple(layout.values),
+               journal=None if journal is None else str(journal))
 
 
 def read_journal(path: Union[str, Path], field: str = "path", layout: Optional[jr.Layout] = None, result_class=StudyResult) -> StudyResult:
@@ -208,7 +211,7 @@ def read_journal(path: Union[str, Path], field: str = "path", layout: Optional[j
         raise config_error(field, str(path), "is an empty file, not a study journal")
     ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the reference first (stable)
     start = 0 if ordered and ordered[0][0] is None else 1
-    return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, layout, result_class)
+    return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, layout, result_class, journal=path)
 
 
 def case_config(config: Config, case: dict, variables: Sequence[str], indices: Sequence[str], reference: Optional[Mapping] = None) -> Config:
@@ -350,7 +353,7 @@ def study(
         finally:
             if bar is not None:
                 bar.close()
-    result = result_of(rows, config, layout, result_class)
+    result = result_of(rows, config, layout, result_class, journal=journal)
     if out is not None and out.suffix == ".parquet":
         result.to_parquet(out)
     return result
