@@ -71,7 +71,7 @@ def run_setting_aside_stale(run, force: bool):
                 raise
             path.replace(path.with_name(path.name + ".stale"))
             set_aside.add(path)
-            print(f"# set aside {path} as {path.name}.stale: it {e.reason.split(';')[0]}", file=sys.stderr)
+            print(f"# set aside {path} as {path.name}.stale: {e.reason.split(';')[0]}", file=sys.stderr)
 
 
 def check_config_file(path) -> None:
