@@ -176,3 +176,19 @@ def test_band_level_labels_are_checked_by_name(labels, why):
     cfg.output.band_levels = labels
     with pytest.raises(vtb.ConfigError, match=r"output\.band_levels\[0\].*" + why):
         vtb.simulate(cfg, progress=False)
+
+
+def test_band_levels_beyond_the_resolved_band_warn():
+    """The article hybrid resolves the rail to about 0.5 kHz: a 2 kHz band level of the rail
+    warns, a 125 Hz one does not."""
+    cfg = vtb.paper_config()
+    cfg.solver.t_end = 0.2
+    cfg.output.band_levels = [2000]
+    with pytest.warns(vtb.ResolutionWarning, match=r"output\.band_levels \(2000 Hz band, rail\)"):
+        vtb.simulate(cfg, progress=False)
+    cfg.output.band_levels = [125]
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", vtb.ResolutionWarning)
+        vtb.simulate(cfg, progress=False)

@@ -58,18 +58,25 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
 
 
 def _warn_band_limit(cfg: Config) -> None:
-    """A band-limited index beyond the band the run resolves for its top layer warns
-    (:class:`vtb.ResolutionWarning`); a configuration the core refuses is left to the run, which
-    names the field."""
+    """A band-limited index beyond the band the run resolves for its top layer, or a band level
+    (``output.band_levels``) beyond the band of its layer, warns (:class:`vtb.ResolutionWarning`);
+    a configuration the core refuses is left to the run, which names the field."""
     from .resolution import warn_beyond
 
     fc = _real(getattr(cfg.output, "band_limit", None))
     layers = getattr(cfg.structure, "layers", None)
-    if fc is None or not layers:
+    if not layers:
         return
+    bands = [b for b in (_real(b) for b in (getattr(cfg.output, "band_levels", None) or [])) if b is not None and b > 0]
     try:
-        warn_beyond(cfg, layers[0].name, fc, "output.band_limit")
-    except VtbError:
+        if fc is not None:
+            warn_beyond(cfg, layers[0].name, fc, "output.band_limit")
+        if bands:
+            # the top band's upper edge: exact base-10 midband · 10^(1/20) (docs/spectra.md)
+            top = 1000.0 * 10.0 ** (round(10.0 * np.log10(max(bands) / 1000.0)) / 10.0 + 0.05)
+            for layer in layers:
+                warn_beyond(cfg, layer.name, top, f"output.band_levels ({max(bands):g} Hz band, {layer.name})")
+    except (VtbError, AttributeError, TypeError):
         pass
 
 
