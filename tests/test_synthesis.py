@@ -102,6 +102,15 @@ def test_a_coupled_run_with_dampers_matches_the_finite_elements_within_3_percent
     assert_matches_the_finite_elements(c)
 
 
+def test_two_quarter_cars_match_the_finite_elements_within_3_percent():
+    """The other vehicle model on the synthesis: two quarter cars with Hertz contact patches,
+    one wheel each, against the same run on the finite elements."""
+    c = one_span()
+    patch = c.vehicles[0].contact_patch
+    c.vehicles = [vtb.Vehicle.quarter_car(13_600.0, 2_400.0, 1e6, 4e4, x_front=x, contact_patch=patch) for x in (14.0, 11.0)]
+    assert_matches_the_finite_elements(c)
+
+
 def test_lockstep_groups_give_each_jobs_own_bits():
     """Five jobs (different damper designs and irregularity samples) in lockstep groups of 8,
     4 + 1 and 2 + 2 + 1: every job's histories and metrics are the bits of its single run."""
