@@ -366,7 +366,7 @@ pub fn check(cfg: &Config) -> Result<()> {
                 continue;
             }
             let p = path(r.field, i);
-            if cfg.accept_implausible.iter().any(|a| *a == p) {
+            if cfg.accept_implausible.contains(&p) {
                 continue;
             }
             return Err(VtbError::config(
