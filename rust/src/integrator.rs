@@ -38,8 +38,8 @@ use crate::error::Result;
 use crate::linalg::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::linalg::sparse::{CsrMatrix, Ldlt, SymOperator};
 
-/// Port columns processed together (one car: four wheelsets).
-pub const GW: usize = 4;
+/// Port columns processed together: one vehicle's wheels, at most `vehicle::MAX_WHEELS`.
+pub const GW: usize = crate::vehicle::MAX_WHEELS;
 /// Port vectors with at most this many entries use cached columns of A⁻¹.
 const COLUMN_PORTS_MAX_LEN: usize = 16;
 /// Cached columns kept before unused ones are dropped.

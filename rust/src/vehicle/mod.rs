@@ -95,7 +95,8 @@ pub trait VehicleModel {
     fn validate(&self, p: &str) -> Result<()>;
 }
 
-/// The largest number of wheels of one vehicle (the engines' port block width).
+/// The largest number of wheels of one vehicle: the engines' port block width
+/// (`integrator::GW`), so a model with more wheels needs a wider block.
 pub const MAX_WHEELS: usize = 4;
 
 /// A vehicle model assembled for the engines.
@@ -195,5 +196,20 @@ impl Vehicle {
             .map(|&i| f[i] - (0..n).map(|j| self.k[i * n + j] * z[j]).sum::<f64>())
             .collect();
         (p, z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every model fits the engines' port block, and its layout names its DOFs.
+    #[test]
+    fn every_model_fits_the_port_block() {
+        for kind in VehicleKind::ALL {
+            let (dofs, wheels) = kind.layout();
+            assert!((1..=MAX_WHEELS).contains(&wheels), "{}", kind.name());
+            assert_eq!(dofs[0], "Z_c", "the body's bounce comes first");
+        }
     }
 }
