@@ -95,7 +95,7 @@ impl Func {
 /// Gauss–Legendre nodes and weights on [−1, 1] (n = 16, exact to degree 31).
 fn gauss16() -> &'static ([f64; 16], [f64; 16]) {
     static GL: OnceLock<([f64; 16], [f64; 16])> = OnceLock::new();
-    GL.get_or_init(|| gauss_legendre::<16>())
+    GL.get_or_init(gauss_legendre::<16>)
 }
 
 fn gauss_legendre<const N: usize>() -> ([f64; N], [f64; N]) {

@@ -1,8 +1,9 @@
 //! vtb — vehicle–track–bridge vertical dynamics.
 //!
 //! The core library: beam layers in a modal (Hermite + sine) or finite-element basis,
-//! couplings, a 10-DOF car, Hertz contact and Newmark integration. It has no Python types;
-//! the `vtb._core` extension module in `rust/bindings` wraps it.
+//! couplings, vehicle models (Zhai's 10-DOF car, a quarter car), Hertz contact, dampers,
+//! Newmark integration and the complex-modal synthesis of a finite-element structure. It has
+//! no Python types; the `vtb._core` extension module in `rust/bindings` wraps it.
 //!
 //! ```no_run
 //! use vtb::{Config, Profile, simulate};
@@ -10,6 +11,11 @@
 //! let result = simulate(&cfg, &Profile::flat(), None).unwrap();
 //! println!("{:?}", result.metrics());
 //! ```
+
+// `!(x > 0.0)` also refuses NaN: the validation's idiom, kept over `partial_cmp`.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// The numeric kernels walk several arrays with one index; iterator chains would hide that.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bands;
 pub mod basis;

@@ -54,7 +54,7 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
         out.extend(CAR_INDICES.map(String::from));
         if 1.0 / cfg.solver.dt >= crate::comfort::MIN_RATE {
             out.push(COMFORT.to_string());
-            out.extend((1..cfg.vehicles.len()).map(|k| car_comfort(k)));
+            out.extend((1..cfg.vehicles.len()).map(car_comfort));
         }
         out.extend(CONTACT_INDICES.map(String::from));
         for w in 0..cfg

@@ -223,6 +223,14 @@ impl CsrMatrix {
     }
 }
 
+/// A diagonal segment of light entries: first row i, length, offset j − i, value offset.
+type Segment = (usize, usize, usize, usize);
+/// A heavy row: its index and its runs (first column, length, value offset).
+type HeavyRow = (usize, Vec<(usize, usize, usize)>);
+/// The order key of an unknown: (heavy, late, its component's size, its rank in the component,
+/// the component).
+type GroupKey = (bool, bool, usize, usize, usize);
+
 /// Two symmetric sparse matrices A, B on the union of their patterns, prepared for the
 /// repeated products y_a = A·x, y_b = B·x in one pass: the diagonals as vectors, the light
 /// off-diagonal entries once each (i < j) grouped into diagonal segments (runs of consecutive
@@ -237,10 +245,10 @@ pub struct SymOperator {
     diag: [Vec<f64>; 2],
     /// Light–light off-diagonal entries (i, i + d) as segments (first i, length, offset d,
     /// value offset).
-    segs: Vec<(usize, usize, usize, usize)>,
+    segs: Vec<Segment>,
     seg_vals: [Vec<f64>; 2],
     /// Heavy rows: index, runs (first column, length, value offset).
-    heavy: Vec<(usize, Vec<(usize, usize, usize)>)>,
+    heavy: Vec<HeavyRow>,
     heavy_vals: [Vec<f64>; 2],
 }
 
@@ -463,7 +471,7 @@ fn slot_major(a: &CsrMatrix, order: &[usize], heavy: &[bool], late: &[bool]) -> 
     }
     let mut rank_in = vec![0usize; ncomp];
     // Components of equal size share their offset pattern, so they are grouped.
-    let mut keyed: Vec<((bool, bool, usize, usize, usize), usize)> = order
+    let mut keyed: Vec<(GroupKey, usize)> = order
         .iter()
         .map(|&i| {
             if heavy[i] {

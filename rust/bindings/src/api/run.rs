@@ -8,6 +8,14 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::sync::{Arc, Mutex};
+
+/// A profile as the batch receives it: (x0, dx, values, one tread row per wheel).
+type ProfileArrays<'a> = (
+    f64,
+    f64,
+    Option<PyReadonlyArray1<'a, f64>>,
+    Vec<PyReadonlyArray1<'a, f64>>,
+);
 use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
 
 /// A structure's complex-modal reduction held by the core (built by `vtb.synthesis`): the
@@ -106,12 +114,7 @@ pub(crate) fn simulate<'py>(
 pub(crate) fn batch<'py>(
     py: Python<'py>,
     configs: Vec<String>,
-    profiles: Vec<(
-        f64,
-        f64,
-        Option<PyReadonlyArray1<'_, f64>>,
-        Vec<PyReadonlyArray1<'_, f64>>,
-    )>,
+    profiles: Vec<ProfileArrays<'_>>,
     profile_index: Vec<usize>,
     threads: usize,
     progress: Option<Bound<'py, PyAny>>,

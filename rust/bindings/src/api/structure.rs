@@ -9,6 +9,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use vtb::{Profile, VtbError};
 
+/// (starts, values): the first DOF of each row and the rows' values.
+type ShapeRows<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
+
 /// The assembled structure matrices M, K, C of a configuration as COO triplets
 /// (rows, cols, values) with their dimension, plus each layer's DOF offset.
 #[pyfunction]
@@ -56,7 +59,7 @@ pub(crate) fn shapes<'py>(
     config_json: &str,
     layer: usize,
     xs: PyReadonlyArray1<'_, f64>,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
+) -> PyResult<ShapeRows<'py>> {
     let cfg = parse_config(py, config_json)?;
     let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let st = &model.structure;
@@ -78,7 +81,7 @@ pub(crate) fn shapes<'py>(
             return Err(to_py_err(
                 py,
                 VtbError::config(
-                    &format!("x[{i}]"),
+                    format!("x[{i}]"),
                     x,
                     format!(
                         "must lie on layer {:?}, {a} ≤ x ≤ {b}",
