@@ -40,11 +40,13 @@ given by the user). ``none`` is a perfectly smooth rail.
 
 Local defects (docs/defects.md): ``rail_joint`` (a step and a V-shaped dip of total angle 2α =
 4·depth/length at the joint, Jenkins et al. 1974), ``dipped_weld`` (a cosine dip with a short
-cosine crown at its centre, after Zhai) and ``wheel_flat`` (a rounded flat of length L and
-depth L²/(16R) on one wheel, repeating every wheel circumference 2πR; Wu & Thompson 2002).
-The rail defects are seen through the wheel: the wheel centre rides the upper envelope of
-circles of the wheel's radius rolled over the rail geometry, so a step or a kink gives the
-finite contact slope a real wheel meets, not one set by the sampling.
+cosine crown at its centre, after Zhai) and ``wheel_flat`` (on one wheel, repeating every
+wheel circumference 2πR: a rounded flat of length L and depth L²/(16R), Wu & Thompson 2002,
+or a new flat, the chord of length L with sharp edges). Every defect is seen through the
+wheel: the wheel centre rides the upper envelope of circles of the wheel's radius rolled over
+the geometry (the rail's, or the flat's dent in the tread rolled on a flat rail), so a step,
+a kink or a flat's edge gives the finite contact slope a real wheel meets, not one set by the
+sampling, and a hollow narrower than the wheel's curvature is bridged.
 
 A profile is its own ``kind`` plus any number of ``parts`` (each an :class:`Irregularity`),
 superposed: a long-wave spectrum for the car body, a short-wave one for the track, and local
@@ -158,6 +160,8 @@ DEFECTS = ("rail_joint", "dipped_weld", "wheel_flat")
 #: Default sampling step of a local defect (m): it resolves the ~30 mm over which a wheel of
 #: radius 0.46 m meets a 1 mm step (√(2Rh)).
 DEFECT_DX = 5e-4
+#: The shapes of a wheel flat: worn round (Wu & Thompson 2002) or new, with sharp edges.
+FLAT_SHAPES = ("rounded", "new")
 
 
 def band_variance(kind: str, wavelength_min: float, wavelength_max: float, **params) -> float:
@@ -284,8 +288,13 @@ class Irregularity(StrictFields):
         depth (m) of the V-shaped dip at the joint, its length (m, both rail ends together)
         and the joint's position (m). ``"dipped_weld"``: depth (m) and length (m, typically
         1) of the dip and the weld's position (m, its centre). ``"wheel_flat"``: depth (m;
-        0 gives L²/(16R)) and length L (m) of the rounded flat, and the position (m) at which
-        its centre meets the rail (once every 2πR before and after).
+        0 gives L²/(16R) for a rounded flat; a new flat's is R − √(R² − L²/4) and must be
+        left at 0) and length L (m) of the flat, and the position (m) at which its centre
+        meets the rail (once every 2πR before and after).
+    flat_shape
+        ``"wheel_flat"``: ``"rounded"`` (default; the worn cosine r = (d/2)(1 − cos 2πs/L) in
+        the tread) or ``"new"`` (the chord of length L, sharp-edged, as a flat is just after it
+        forms).
     step
         ``"rail_joint"``: height (m) by which the rail after the joint lies lower (positive:
         a step down in the running direction; negative: a step up, the impact case).
@@ -330,6 +339,7 @@ class Irregularity(StrictFields):
     step: float = 0.0
     crown: float = 0.0
     crown_length: float = 0.1
+    flat_shape: str = "rounded"
     wheel: int = 0
     wheel_radius: Optional[float] = None
     parts: list = field(default_factory=list)
@@ -419,8 +429,12 @@ class Irregularity(StrictFields):
                     raise config_error(f"{p}.wheel", self.wheel, "must be a non-negative integer")
                 if n_wheels is not None and self.wheel >= n_wheels:
                     raise config_error(f"{p}.wheel", self.wheel, f"the run has {n_wheels} wheels (0 to {n_wheels - 1})")
-                if self.wheel_radius is not None and self.length >= math.pi * self.wheel_radius:
-                    raise config_error(f"{p}.length", self.length, f"must be shorter than half the circumference π·R = {math.pi * self.wheel_radius:.4g} m")
+                if self.flat_shape not in FLAT_SHAPES:
+                    raise config_error(f"{p}.flat_shape", self.flat_shape, f"must be one of {', '.join(FLAT_SHAPES)}")
+                if self.flat_shape == "new" and self.depth != 0:
+                    raise config_error(f"{p}.depth", self.depth, "a new flat's depth follows from its length, R − √(R² − L²/4): leave depth at 0")
+                if self.wheel_radius is not None:
+                    self._check_flat_length(self.wheel_radius, p)
         elif self.kind == "sampled":
             finite("x0", self.x0)
             if self.dx is None:
@@ -483,6 +497,7 @@ class Irregularity(StrictFields):
         treads = [np.zeros(0) for _ in wheel_radii] if flats else []
         for q in flats:
             r = q.wheel_radius if q.wheel_radius is not None else float(wheel_radii[q.wheel])
+            q._check_flat_length(r, "irregularity" if q is self else f"irregularity.parts[{next(i for i, p in enumerate(self.parts) if p is q)}]")
             row = treads[q.wheel] if treads[q.wheel].size else np.zeros(n)
             treads[q.wheel] = row + q._flat(x, r) * q.scale
         return float(x_min), float(dx), values, treads
@@ -535,12 +550,36 @@ class Irregularity(StrictFields):
             r[near] = wheel_centre_path(r[near], float(x[1] - x[0]), radius)
         return r
 
-    def _flat(self, x: np.ndarray, radius: float) -> np.ndarray:
-        """A rounded wheel flat of length L (depth L²/(16R) unless given) at ``position`` and
-        every circumference 2πR from it, as the irregularity under its wheel at x (m)."""
+    def _check_flat_length(self, radius: float, path: str) -> None:
+        """A rounded flat shorter than half the circumference, a new flat's chord than the
+        diameter."""
+        limit, what = (math.pi * radius, "half the circumference π·R") if self.flat_shape == "rounded" else (2.0 * radius, "the diameter 2R")
+        if self.length >= limit:
+            raise config_error(f"{path}.length", self.length, f"must be shorter than {what} = {limit:.4g} m (R = {radius:g} m)")
+
+    def _flat_dent(self, s: np.ndarray, radius: float) -> np.ndarray:
+        """The flat's dent in the tread (m, inward) at arc length s (m) from its centre."""
+        if self.flat_shape == "new":
+            # The chord's radial gap to the circle: R − R·cos θ0 / cos(s/R), θ0 = asin(L/2R).
+            t0 = math.asin(0.5 * self.length / radius)
+            t = np.clip(s / radius, -t0, t0)
+            return np.where(np.abs(s) <= radius * t0, radius - radius * math.cos(t0) / np.cos(t), 0.0)
         depth = self.depth if self.depth > 0 else self.length**2 / (16.0 * radius)
-        u = np.mod(x - self.position + 0.5 * self.length, 2.0 * math.pi * radius)
-        return np.where(u <= self.length, 0.5 * depth * (1.0 - np.cos(2.0 * math.pi * u / self.length)), 0.0)
+        return np.where(np.abs(s) <= 0.5 * self.length, 0.5 * depth * (1.0 + np.cos(2.0 * math.pi * s / self.length)), 0.0)
+
+    def _flat(self, x: np.ndarray, radius: float) -> np.ndarray:
+        """The wheel flat at ``position`` and every circumference 2πR from it, as the
+        irregularity under its wheel at x (m): the path of the wheel's centre as the dented
+        tread rolls on a flat rail, i.e. :func:`wheel_centre_path` of the dent (for small
+        slopes a dent in the wheel and the same dent in the rail under a round wheel give the
+        same path). The path is built once on a grid four times finer than x's and placed at
+        every revolution, so a new flat's kink stays sharp to x's spacing."""
+        h = 0.25 * (float(x[1] - x[0]) if x.size > 1 else DEFECT_DX)
+        half = radius * math.asin(min(1.0, 0.5 * self.length / radius)) + 4.0 * h
+        s = h * np.arange(-math.ceil(half / h), math.ceil(half / h) + 1)
+        path = wheel_centre_path(self._flat_dent(s, radius), h, radius)
+        u = np.mod(x - self.position + s[-1], 2.0 * math.pi * radius) - s[-1]
+        return np.interp(u, s, path, left=0.0, right=0.0)
 
     def _check_realised_band(self, s, n: int, dx: float) -> None:
         """Warns when the inverse FFT's frequency grid (spacing 1/(n·dx)) realises the band's
