@@ -453,13 +453,16 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("name", nargs="?", help="example to print (e.g. article)")
     e.set_defaults(func=cmd_examples)
 
+    from .reproduce import DEFAULT_OPTIMISER
+
     r = sub.add_parser("reproduce", help="the article's whole chain: §3.3 histories, sweep, optimisation; figures, tables, report")
     r.add_argument("--out", required=True, help="output directory")
     r.add_argument("--quick", action="store_true", help="reduced chain (about a minute)")
     r.add_argument("--seed", type=int, default=0, help="optimiser seed")
     r.add_argument("--pop", type=int, help="optimiser population (default: 100; --quick 8)")
     r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
-    r.add_argument("--optimiser", choices=("warm", "cold", "both"), default="warm", help="warm: seeded from the sweep with the hypervolume stop (default); cold: the article's budget from a random start; both: the two, compared")
+    r.add_argument("--optimiser", choices=("warm", "cold", "both"), default=DEFAULT_OPTIMISER,
+                   help=f"warm: first population from the sweep; cold: a random one; both: the two, compared; each stops on the hypervolume (default {DEFAULT_OPTIMISER}, chosen over seeds in docs/optimiser-choice)")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match; those of another configuration are renamed *.stale and their stage runs afresh)")
     scheduler(r)

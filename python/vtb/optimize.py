@@ -362,7 +362,8 @@ def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config,
     path) as ``(X, F, G, metrics)`` of this optimisation: X rows (b_t, k_t, c_t), F and G as
     :func:`tid_objectives` computes them against ``baseline``, and each case's metrics. The sweep
     must be of ``config`` (same stamp) and its uncontrolled run must equal ``baseline``; the
-    optimiser keeps the points within :data:`BOUNDS`."""
+    optimiser keeps the points within :data:`BOUNDS`. The points come sorted by (b_t, k_t,
+    c_t), so a journal read back and the sweep that wrote it give the same warm start."""
     sw = warm_start if isinstance(warm_start, SweepResult) else read_journal(warm_start, field="warm_start")
     label = "SweepResult" if isinstance(warm_start, SweepResult) else str(warm_start)
     if config_stamp(sw.config) != config_stamp(config):
@@ -373,6 +374,9 @@ def warm_start_points(warm_start: Union[SweepResult, str, Path], config: Config,
             raise stale_file_error("warm_start", sw.journal, reason)
         raise config_error("warm_start", label, reason)
     c, ok = sw.columns, np.flatnonzero(sw.controlled)
+    # In (b_t, k_t, c_t) order, whatever order the journal's lines are in: the first population
+    # (and a checkpoint's identity) must not depend on which cases a sweep ran first.
+    ok = ok[np.lexsort((c["c_t"][ok], c["k_t"][ok], c["b_t"][ok]))]
     X = np.column_stack([c["b_t"][ok], c["k_t"][ok], c["c_t"][ok]])
     metrics = [{m: float(c[m][i]) for m in METRICS} for i in ok]
     FG = [tid_objectives(config, baseline).fg(r) for r in metrics]

@@ -337,11 +337,15 @@ def plot_slab_indices(table: dict, baseline: dict, path=None) -> Figure:
 @styled
 def plot_hypervolume(histories: dict, path=None) -> Figure:
     """The feasible front's hypervolume against the evaluations, one trace per optimisation
-    run (``{label: [MogaGeneration, …]}``)."""
+    run (``{label: [MogaGeneration, …]}``), or one style per label for several runs (``{label:
+    [[MogaGeneration, …], …]}``, e.g. one per seed)."""
     fig = figure(50.0)
     ax = fig.subplots()
-    for i, (label, h) in enumerate(histories.items()):
-        ax.plot([g.n_evals for g in h], [g.hypervolume for g in h], marker="." if i == 0 else "x", ms=3, label=label, **_trace_style(i))
+    for i, (label, runs) in enumerate(histories.items()):
+        several = bool(runs) and isinstance(runs[0], list)
+        for j, h in enumerate(runs if several else [runs]):
+            ax.plot([g.n_evals for g in h], [g.hypervolume for g in h], marker="." if i == 0 else "x", ms=3 if not several else 1.5,
+                    label=label if j == 0 else None, **_trace_style(i))
     ax.set_xlabel("evaluations")
     ax.set_ylabel("hypervolume $H$ ((m/s²)²)")
     ax.grid(True, alpha=0.3)

@@ -6,9 +6,10 @@ The article does not state its irregularity level; the chain runs the calibrated
 (``paper_config(calibrated=True)``: one scale fitted so that the uncontrolled rail acceleration
 amplitude is 1005.6 m/s²). Every other number is an out-of-sample comparison.
 
-The optimisation starts warm from the sweep's cases within the optimiser's bounds and stops on
-:data:`STOP_HV`; ``optimiser="cold"`` runs the article's budget from a random start instead, and
-``"both"`` runs the two and compares their hypervolumes against evaluations.
+The optimisation starts from :data:`DEFAULT_OPTIMISER`'s start and stops on :data:`STOP_HV`:
+``"warm"`` chooses its first population among the sweep's cases within the optimiser's bounds,
+``"cold"`` draws it at random, ``"both"`` runs the two and compares their hypervolumes against
+evaluations (docs/optimiser-choice/ compares them over seeds).
 """
 
 from __future__ import annotations
@@ -32,9 +33,13 @@ from .machine import describe
 #: --quick: a reduced grid and a small optimisation (about a minute on two cores).
 QUICK = dict(b_t=(2.0, 5.0, 8.0), k_t=(1e7, 1e8, 2e8, 5e8, 1e9), c_t=(10.0, 1e3), pop_size=8, n_gen=3)
 FULL = dict(b_t=ARTICLE_B, k_t=ARTICLE_K, c_t=ARTICLE_C, pop_size=100, n_gen=100)
-#: The warm run's convergence stop: the hypervolume of the feasible front (reference: the
-#: uncontrolled (a_rm0, a_sm0)) moved by less than 0.1 % over 10 generations; n_gen stays the cap.
+#: The optimisation's convergence stop, warm or cold: the hypervolume of the feasible front
+#: (reference: the uncontrolled (a_rm0, a_sm0)) moved by less than 0.1 % over 10 generations;
+#: n_gen stays the cap.
 STOP_HV = (1e-3, 10)
+#: The optimisation's start by default, chosen from the hypervolume histories over seeds in
+#: docs/optimiser-choice/ (``python benches/optimiser_choice.py``; a test holds them equal).
+DEFAULT_OPTIMISER = "warm"
 
 ARTICLE_33 = {"rail_disp_max": (0.9663e-3, 0.9621e-3), "rail_acc_max": (1005.6, 994.2), "slab_disp_max": (0.4645e-3, 0.4456e-3), "slab_acc_max": (43.9355, 42.3621)}
 #: The article's car-body acceleration amplitude (m/s²), uncontrolled and with its MOGA solution.
@@ -81,10 +86,10 @@ def _bands_figure(results, labels, out: Path) -> list:
     return [rows[k] for k in sorted(rows)]
 
 
-def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str = "warm", progress: bool = True, executor=None) -> dict:
-    """The §4.4 optimisation runs: ``"warm"`` starts from the sweep ``sw`` and stops on
-    :data:`STOP_HV`, ``"cold"`` is the article's budget from a random start, ``"both"`` runs the
-    two (the same seed, population and generation cap). Each run keeps a checkpoint in ``out``
+def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str = DEFAULT_OPTIMISER, progress: bool = True, executor=None) -> dict:
+    """The §4.4 optimisation runs, each stopping on :data:`STOP_HV`: ``"warm"`` starts from the
+    sweep ``sw``, ``"cold"`` from a random population, ``"both"`` runs the two (the same seed,
+    population and generation cap). Each run keeps a checkpoint in ``out``
     named by its budget and seed, so an interrupted chain resumes and a finished run is reused.
     Writes ``out/optimisation_history.csv``: per run and generation the evaluations so far and
     the hypervolume of the feasible front. Returns ``{run: (OptimizationResult, seconds)}``."""
@@ -94,9 +99,9 @@ def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str 
     for label in ("warm", "cold"):
         if optimiser in (label, "both"):
             t0 = time.perf_counter()
-            opts = dict(warm_start=sw, stop_hv=STOP_HV) if label == "warm" else {}
+            opts = dict(warm_start=sw) if label == "warm" else {}
             ckpt = out / f"optimisation_{label}_{plan['pop_size']}x{plan['n_gen']}_seed{seed}.npz"
-            res = optimize(cfg, pop_size=plan["pop_size"], n_gen=plan["n_gen"], seed=seed, progress=progress, checkpoint=ckpt, executor=executor, **opts)
+            res = optimize(cfg, pop_size=plan["pop_size"], n_gen=plan["n_gen"], seed=seed, stop_hv=STOP_HV, progress=progress, checkpoint=ckpt, executor=executor, **opts)
             runs[label] = (res, time.perf_counter() - t0)
     _write_csv(out / "optimisation_history.csv", [
         dict(run=label, gen=h.gen, n_evals=h.n_evals, hypervolume=h.hypervolume, n_front=h.n_front, n_feasible=h.n_feasible)
@@ -105,7 +110,7 @@ def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str 
     return runs
 
 
-def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size: Optional[int] = None, n_gen: Optional[int] = None, optimiser: str = "warm",
+def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size: Optional[int] = None, n_gen: Optional[int] = None, optimiser: str = DEFAULT_OPTIMISER,
         executor=None) -> Path:
     """Runs the chain and writes ``out/report.md`` with its figures (PNG and PDF) and tables.
     ``pop_size``, ``n_gen`` override the optimisation budget (full: 100 × 100; the warm run's
@@ -215,8 +220,8 @@ def _optimiser_text(runs: dict, plan: dict) -> list:
     L = []
     for label, (res, _) in runs.items():
         m = res.moga
-        start = (f"first population chosen among the sweep's cases within the bounds ({m.history[0].n_evals} random points added), "
-                 f"stop when the hypervolume moves by less than {STOP_HV[0]:g} over {STOP_HV[1]} generations") if label == "warm" else "random start (the article's cold budget)"
+        start = (f"first population chosen among the sweep's cases within the bounds ({m.history[0].n_evals} random points added)" if label == "warm"
+                 else "random first population") + f", stop when the hypervolume moves by less than {STOP_HV[0]:g} over {STOP_HV[1]} generations"
         L.append(f"* {label}: NSGA-II, population {m.pop.X.shape[0]}, at most {plan['n_gen']} generations, {start}: "
                  f"{m.n_gen} generations, {m.n_evals} evaluations ({m.message}); hypervolume {m.history[-1].hypervolume:.6g} (m/s²)².")
     if len(runs) == 2 and runs["cold"][0].moga.history[-1].hypervolume > 0:
@@ -228,14 +233,15 @@ def _optimiser_text(runs: dict, plan: dict) -> list:
 
 def _report(out: Path, quick, cfg, rows33, sweep_text, runs, table3, car, times, plan, resumed, bands, evidence, sw, chosen) -> None:
     opt = runs["warm" if "warm" in runs else "cold"][0]
+    ran = "both" if len(runs) == 2 else next(iter(runs))
     budget = (plan["pop_size"], plan["n_gen"])
     full_budget = (FULL["pop_size"], FULL["n_gen"])
     L = [
         "# Reproduction of Appl. Sci. 2025, 15, 8675 with vtb" + (" (quick chain)" if quick else ""),
         "",
         "Generated by `vtb reproduce --out " + Path(out).name + (" --quick" if quick else "")
-        + ("" if quick or budget == full_budget else f" --pop {budget[0]} --gen {budget[1]}") + "`"
-        + ("" if list(runs) == ["warm"] else f" with `vtb.reproduce.run(..., optimiser=\"{'both' if len(runs) == 2 else 'cold'}\")`") + "; "
+        + ("" if quick or budget == full_budget else f" --pop {budget[0]} --gen {budget[1]}")
+        + ("" if ran == DEFAULT_OPTIMISER else f" --optimiser {ran}") + "`; "
         f"{describe()} when it finished. "
         + ("**Quick chain**: reduced sweep grid and a tiny optimisation; the numbers show the pipeline, not the article's optimum. " if quick else "")
         + (f"**Reduced optimisation budget**: population {budget[0]} × {budget[1]} generations instead of {full_budget[0]} × {full_budget[1]}. " if not quick and budget != full_budget else "")
