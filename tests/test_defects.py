@@ -151,10 +151,15 @@ def test_parts_load_from_toml_and_name_their_path_in_errors():
         cfg.irregularity = Irregularity(parts=[Irregularity(**fields)])
         with pytest.raises(ConfigError, match=path.replace("[", r"\[").replace("]", r"\]").replace(".", r"\.")):
             cfg.validate()
-    # A flat longer than its wheel allows, the radius taken from the vehicle.
+    # A flat longer than its wheel allows, the radius taken from the vehicle: refused when the
+    # configuration is validated, not first when it is sampled.
     cfg.irregularity = Irregularity(parts=[Irregularity(kind="rail_joint", length=0.5), Irregularity(kind="wheel_flat", length=1.0, flat_shape="new")])
     with pytest.raises(ConfigError, match=r"irregularity\.parts\[1\]\.length.*diameter"):
-        vtb.irregularity_profile(cfg)
+        cfg.validate()
+    # The rail's profile alone leaves the flats out, whatever wheel they are on.
+    rail = Irregularity(kind="rail_joint", position=1.0, length=0.5, depth=1e-3, parts=[Irregularity(kind="wheel_flat", wheel=3, length=0.05)])
+    x0, dx, r = rail.profile(0.0, 2.0)
+    np.testing.assert_array_equal(r, Irregularity(kind="rail_joint", position=1.0, length=0.5, depth=1e-3).profile(0.0, 2.0)[2])
     cfg.irregularity = Irregularity(parts=[Irregularity(parts=[Irregularity()])])
     with pytest.raises(ConfigError, match=r"irregularity\.parts\[0\]\.parts"):
         cfg.validate()

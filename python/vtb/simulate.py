@@ -52,7 +52,7 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
         raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
     check_types(cfg.irregularity, "irregularity")
     vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
-    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), n_wheels=sum(v.n_wheels for v in vehicles))
+    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
     _warn_band_limit(cfg)
     return text, irregularity_profile(cfg)
 
