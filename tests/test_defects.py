@@ -156,6 +156,12 @@ def test_parts_load_from_toml_and_name_their_path_in_errors():
     cfg.irregularity = Irregularity(parts=[Irregularity(kind="rail_joint", length=0.5), Irregularity(kind="wheel_flat", length=1.0, flat_shape="new")])
     with pytest.raises(ConfigError, match=r"irregularity\.parts\[1\]\.length.*diameter"):
         cfg.validate()
+    # A flat on a wheel of no radius: the vehicle's field is named, not the flat's.
+    bad = vtb.paper_config(model="fast")
+    bad.irregularity = Irregularity(kind="wheel_flat", length=0.05)
+    bad.vehicles[0].wheel_radius = 0.0
+    with pytest.raises(ConfigError, match=r"vehicles\[0\]\.wheel_radius"):
+        bad.validate()
     # The rail's profile alone leaves the flats out, whatever wheel they are on.
     rail = Irregularity(kind="rail_joint", position=1.0, length=0.5, depth=1e-3, parts=[Irregularity(kind="wheel_flat", wheel=3, length=0.05)])
     x0, dx, r = rail.profile(0.0, 2.0)

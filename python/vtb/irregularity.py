@@ -437,7 +437,7 @@ class Irregularity(StrictFields):
                 if self.flat_shape == "new" and self.depth != 0:
                     raise config_error(f"{p}.depth", self.depth, "a new flat's depth follows from its length, R − √(R² − L²/4): leave depth at 0")
                 radius = self.wheel_radius if self.wheel_radius is not None else (wheel_radii[self.wheel] if wheel_radii else None)
-                if radius is not None:
+                if isinstance(radius, (int, float)) and radius > 0:  # a bad radius is refused where it is set
                     self._check_flat_length(radius, p)
         elif self.kind == "sampled":
             finite("x0", self.x0)

@@ -54,6 +54,8 @@ def _prepare(cfg: Config) -> tuple[str, tuple]:
     vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
     cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
     _warn_band_limit(cfg)
+    if any(q.kind == "wheel_flat" for q in (cfg.irregularity, *cfg.irregularity.parts)):
+        _core.validate(text)  # a flat is sampled on its vehicle's wheel: a bad wheel is named first
     return text, irregularity_profile(cfg)
 
 
