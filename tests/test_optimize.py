@@ -117,6 +117,41 @@ def test_killed_optimisation_resumes_to_the_uninterrupted_result(short, result, 
     assert e.value.field == "checkpoint"
 
 
+def _rewrite_stamp(ck, edit) -> None:
+    """Rewrites the configuration stamp in a checkpoint and its designs journal by ``edit``
+    (a stamp as an older or another vtb would have written it)."""
+    import json
+
+    with np.load(ck) as z:
+        arrays = {k: z[k] for k in z.files}
+    header = json.loads(str(arrays["header"]))
+    edit(header["identity"]["problem"]["vtb.optimize"]["config"])
+    arrays["header"] = np.array(json.dumps(header))
+    with open(ck, "wb") as f:
+        np.savez(f, **arrays)
+    journal = ck.with_name(ck.name + ".designs.jsonl")
+    lines = journal.read_text().splitlines()
+    first = json.loads(lines[0])
+    edit(first["vtb.optimize"]["config"])
+    journal.write_text("\n".join([json.dumps(first), *lines[1:]]) + "\n")
+
+
+def test_a_checkpoint_outlives_a_field_added_to_the_schema(short, result, tmp_path, monkeypatch):
+    """A checkpoint whose stamp lacks a field added since (here ``irregularity.flat_shape``,
+    as written before that field existed) resumes without a run: the stamp is read back through
+    today's schema. One whose stamp holds another value (the speed) is refused."""
+    ck = tmp_path / "opt.npz"
+    vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    _rewrite_stamp(ck, lambda stamp: stamp["irregularity"].pop("flat_shape"))
+    calls = _batch_calls(monkeypatch)
+    again = vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+    assert calls == []
+    _same_optimisation(result, again)
+    _rewrite_stamp(ck, lambda stamp: stamp.update(speed=70.0))
+    with pytest.raises(vtb.StaleFileError, match="another optimisation"):
+        vtb.optimize(short, pop_size=8, n_gen=3, seed=3, progress=False, checkpoint=ck)
+
+
 def test_a_generation_killed_mid_batch_keeps_its_finished_designs(short, result, tmp_path, monkeypatch):
     """Killed inside generation 2's batch once three of its designs have finished: those three
     are in the designs journal, and the resumed run evaluates only the others."""
@@ -297,3 +332,19 @@ def test_the_reproductions_default_optimiser_is_the_one_the_seeds_chose():
         pytest.skip(f"the evidence is incomplete ({done} of 5 seeds); the default stays {reproduce.DEFAULT_OPTIMISER!r}")
     assert reproduce.DEFAULT_OPTIMISER == chosen
     assert cli.build_parser().parse_args(["reproduce", "--out", "rep"]).optimiser == chosen
+
+
+def test_a_stamp_is_compared_through_todays_schema(short):
+    """vtb.journal.same_config: a stamp lacking a field added since is the same configuration;
+    one holding another value, or one that no longer parses, is not."""
+    import json
+
+    from vtb.journal import config_stamp, same_config
+
+    stamp = json.loads(config_stamp(short))
+    assert same_config(json.dumps(stamp), short)
+    del stamp["irregularity"]["flat_shape"]
+    assert same_config(stamp, short)
+    assert not same_config(dict(stamp, speed=short.speed + 1.0), short)
+    assert not same_config(dict(stamp, no_such_field=1), short)
+    assert not same_config("0123abcd", short)  # the hash an older checkpoint stored

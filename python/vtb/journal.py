@@ -51,6 +51,18 @@ def config_stamp(config: Config) -> str:
     return json.dumps(config.to_dict(), sort_keys=True)
 
 
+def same_config(stamp, config: Config) -> bool:
+    """Whether a stored ``stamp`` (a :func:`config_stamp`, as text or parsed) is of ``config``.
+    The stamp is read back through today's schema, so a field added since it was written takes
+    its default and does not make the file stale, while a changed default does (the stamp holds
+    the old value); a stamp that no longer parses is another configuration."""
+    try:
+        stored = Config.from_dict(json.loads(stamp) if isinstance(stamp, str) else stamp)
+    except (ConfigError, TypeError, ValueError):
+        return False
+    return config_stamp(stored) == config_stamp(config)
+
+
 def csv_text(rows: list, columns: tuple, header: bool = False) -> str:
     """Rows as CSV: numbers by ``repr`` (exact round trip), ``case`` and ``error`` as they are."""
     buf = io.StringIO()

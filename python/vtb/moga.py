@@ -1066,6 +1066,15 @@ def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, histor
     write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
 
 
+def saved_identity(path: Path):
+    """The identity a checkpoint was saved with, or ``None`` if ``path`` holds no readable one."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return json.loads(str(z["header"])).get("identity")
+    except (OSError, EOFError, ValueError, KeyError, AttributeError, zipfile.BadZipFile):
+        return None
+
+
 def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tuple:
     """Restores ``algo``, ``rng`` and the evaluation count from the checkpoint ``path``;
     returns its history and stop message."""

@@ -37,6 +37,7 @@ from .presets import tids_around
 from .scaleout import run_cases
 from .simulate import Result, simulate
 from .studies import _with_tids, get_field, index_names, set_field
+from .journal import same_config
 from .tid_sweep import METRICS, REFERENCE, SweepResult, case_config, config_stamp, read_journal
 
 #: (lower, upper) of b_t (kg), k_t (N/m), c_t (N·s/m): the article's bounds.
@@ -59,14 +60,40 @@ def tid_problem(evaluate) -> moga.Problem:
     )
 
 
-def checkpoint_identity(config: Config, baseline, **extra) -> dict:
-    """What an optimisation's evaluations depend on, hashed, for its checkpoint: the
-    configuration, its uncontrolled metrics (``baseline``) and any ``extra`` JSON values."""
+def checkpoint_identity(config: Config, baseline, checkpoint=None, **extra) -> dict:
+    """What an optimisation's evaluations depend on, for its checkpoint: the configuration's
+    stamp, a hash of its uncontrolled metrics (``baseline``) and any ``extra`` JSON values.
+    When ``checkpoint`` (or its designs journal) already holds the stamp of the same
+    configuration written by an earlier schema (:func:`vtb.journal.same_config`), that stamp is
+    adopted, so a field added to the schema since does not make the checkpoint stale."""
+    stamp = json.loads(config_stamp(config))
+    if checkpoint is not None:
+        saved = _saved_stamp(Path(checkpoint))
+        if saved is not None and saved != stamp and same_config(saved, config):
+            stamp = saved
     return {"vtb.optimize": {
-        "config": hashlib.sha256(config_stamp(config).encode()).hexdigest(),
+        "config": stamp,
         "baseline": hashlib.sha256(json.dumps(baseline, sort_keys=True).encode()).hexdigest(),
         **extra,
     }}
+
+
+def _saved_stamp(checkpoint: Path):
+    """The configuration stamp of the identity a checkpoint (or, before its first generation,
+    its designs journal) was written with; ``None`` if there is none to read (the optimiser
+    then reports what is wrong with the file)."""
+    identity = moga.saved_identity(checkpoint)
+    journal = Path(str(checkpoint) + ".designs.jsonl")
+    if identity is None and journal.exists():
+        try:
+            with open(journal) as f:
+                identity = {"problem": json.loads(f.readline())}
+        except (OSError, ValueError):
+            return None
+    try:
+        return identity["problem"]["vtb.optimize"]["config"]
+    except (TypeError, KeyError):
+        return None
 
 
 @dataclasses.dataclass
@@ -270,7 +297,7 @@ def _optimize_fields(config, variables, objectives, constraints, reference, repo
     evaluate = Objectives(base, paths, objectives, tuple(cons), record, failed, threads, executor=executor)
     problem = moga.Problem(lower=[s[1] for s in spec], upper=[s[2] for s in spec], n_obj=len(objectives), n_constr=len(cons),
                            evaluate=evaluate, log_scale=np.array([s[3] for s in spec]))
-    identity = checkpoint_identity(base, ref, paths=list(paths), objectives=list(objectives), constraints=[list(c) for c in cons], record=list(record))
+    identity = checkpoint_identity(base, ref, checkpoint, paths=list(paths), objectives=list(objectives), constraints=[list(c) for c in cons], record=list(record))
     if checkpoint is not None:
         evaluate.designs.path = Path(str(checkpoint) + ".designs.jsonl")
         evaluate.designs.load(identity)
@@ -479,7 +506,7 @@ def optimize(
         evaluate.cache.update((tuple(x), [m]) for x, m in zip(X0, metrics))
         initial = (X0, F0, G0)
     problem = tid_problem(evaluate)
-    identity = checkpoint_identity(config, baseline)
+    identity = checkpoint_identity(config, baseline, checkpoint)
     if checkpoint is not None:
         evaluate.designs.path = Path(str(checkpoint) + ".designs.jsonl")
         evaluate.designs.load(identity)

@@ -542,7 +542,7 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
             if isinstance(r, BaseException):
                 raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
-    identity = checkpoint_identity(config, baselines, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
+    identity = checkpoint_identity(config, baselines, checkpoint, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
     journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
     evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, DesignJournal(journal), executor)
     initial = None
