@@ -293,7 +293,7 @@ class Irregularity(StrictFields):
         meets the rail (once every 2πR before and after).
     flat_shape
         ``"wheel_flat"``: ``"rounded"`` (default; the worn cosine dent (d/2)(1 + cos 2πs/L),
-        s from the flat's centre, |s| ≤ L/2) or ``"new"`` (the chord of length L, sharp-edged,
+        s from the flat's centre, −L/2 ≤ s ≤ L/2) or ``"new"`` (the chord of length L, sharp-edged,
         as a flat is just after it forms). The wheel centre's path over either is the
         small-slope envelope: within 0.1 % of the depth of the exact rolling for flats up to
         50 mm, 0.4 % at 100 mm.
