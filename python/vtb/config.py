@@ -207,7 +207,7 @@ class Solver(StrictFields):
     dt: float = _default("SolverConfig", "dt")
     t_end: Optional[float] = _default("SolverConfig", "t_end")
     tail: Optional[float] = _default("SolverConfig", "tail")
-    edge_ramp: float = _default("SolverConfig", "edge_ramp")
+    edge_ramp: Optional[float] = _default("SolverConfig", "edge_ramp")
     end_margin: float = _default("SolverConfig", "end_margin")
     gravity: float = _default("SolverConfig", "gravity")
     contact_tol: float = _default("SolverConfig", "contact_tol")

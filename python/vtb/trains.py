@@ -6,7 +6,7 @@ and returns their :class:`~vtb.config.Vehicle` s, ready for ``Config.vehicles``;
 (``rust/src/trains.rs``); this module only arranges them.
 
 >>> import vtb
->>> cfg = vtb.paper_config()
+>>> cfg = vtb.track_zones(vtb.paper_config(model="fast"), approach=20.0, exit=20.0)
 >>> cfg.vehicles = vtb.train("velaro_e", cars=8, x_front=-5.0)
 """
 
@@ -58,7 +58,8 @@ def train(name: str = "crh3", cars: Optional[int] = None, x_front: float = 0.0, 
         coupled units beyond its length (16 = a double unit). Default: one unit.
     x_front
         Position (m) of the leading wheelset at t = 0. Cars may start before the structure
-        (x < 0): off it they run on a rigid track.
+        (x < 0): off it they run on a rigid track, and a wheel that crosses an end of the rail
+        needs ``solver.edge_ramp`` (:func:`vtb.track_zones` sets it) or the run is refused.
     **fields
         Vehicle fields set on every car, e.g. ``contact_patch=True`` or ``rails=2``.
 

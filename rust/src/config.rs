@@ -380,10 +380,13 @@ pub struct SolverConfig {
     /// Length (m) at each end of the rail over which a wheel's force is handed between the
     /// rail and the rigid track beyond the structure: the rail carries a raised-cosine share
     /// of it, 0 at the rail's end and 1 at `edge_ramp` from it, so that wheels join and leave
-    /// the structure without a step (docs/zones.md). 0: no hand-over; a wheel crossing an end
-    /// meets the track's static deflection as a step. Finite-element or modal rails.
-    #[serde(default = "default_edge_ramp")]
-    pub edge_ramp: f64,
+    /// the structure without a step (docs/zones.md; `vtb.track_zones` sets 10 m). 0: no
+    /// hand-over, a wheel crossing an end meets the track's static deflection as a step.
+    /// Unset (the default): no hand-over, and a wheel that would cross an end of the rail
+    /// during the run is refused, since that step is a spurious impact unless asked for.
+    /// Finite-element or modal rails.
+    #[serde(default)]
+    pub edge_ramp: Option<f64>,
     /// Distance kept between the leading wheel and the end of the structure for the default
     /// end time (m).
     #[serde(default = "default_end_margin")]
@@ -419,9 +422,6 @@ pub struct SolverConfig {
 fn default_dt() -> f64 {
     5e-5
 }
-fn default_edge_ramp() -> f64 {
-    0.0
-}
 fn default_end_margin() -> f64 {
     1.0
 }
@@ -448,7 +448,7 @@ impl Default for SolverConfig {
             dt: default_dt(),
             t_end: None,
             tail: None,
-            edge_ramp: default_edge_ramp(),
+            edge_ramp: None,
             end_margin: default_end_margin(),
             fade_in: default_fade_in(),
             gravity: default_gravity(),
@@ -1018,10 +1018,10 @@ impl Config {
         let sv = &self.solver;
         sv.validate()?;
         let dt = sv.dt;
-        if sv.edge_ramp > 0.0 && self.discretisation.method == Method::Hybrid {
+        if sv.edge_ramp.is_some_and(|r| r > 0.0) && self.discretisation.method == Method::Hybrid {
             return Err(VtbError::config(
                 "solver.edge_ramp",
-                sv.edge_ramp,
+                sv.edge_ramp.unwrap_or(0.0),
                 "the FE–SEA hybrid's rail terms take a wheel's whole force: use 0, or \
                  discretisation.method = \"fem\" or \"modal\"",
             ));
@@ -1094,6 +1094,25 @@ impl Config {
                         "the profile must cover the wheel travel [{rear:.4}, {front:.4}] m of vehicle {i}"
                     ),
                 ));
+            }
+            if self.solver.edge_ramp.is_none() {
+                let (a, b) = self.extent(0);
+                let crosses = |x: f64| offs.iter().any(|&w| w < x - 1e-9 && w + travel > x + 1e-9);
+                if let Some((end, x)) = [("start", a), ("end", b)]
+                    .into_iter()
+                    .find(|&(_, x)| crosses(x))
+                {
+                    return Err(VtbError::config(
+                        format!("{p}.x_front"),
+                        v.x_front,
+                        format!(
+                            "a wheel of this vehicle crosses the rail's {end} at x = {x} m during the run, where it \
+                             would meet the track's static deflection as a step (a spurious impact): set \
+                             solver.edge_ramp (m) to hand its force over between rail and rigid track \
+                             (vtb.track_zones uses 10), or 0 to keep the step, or keep the vehicles on the rail"
+                        ),
+                    ));
+                }
             }
         }
         for (i, f) in self.forces.iter().enumerate() {
@@ -1690,7 +1709,9 @@ impl SolverConfig {
     pub fn validate(&self) -> Result<()> {
         let dt = positive("solver.dt", self.dt)?;
         non_negative("solver.end_margin", self.end_margin)?;
-        non_negative("solver.edge_ramp", self.edge_ramp)?;
+        if let Some(r) = self.edge_ramp {
+            non_negative("solver.edge_ramp", r)?;
+        }
         non_negative("solver.gravity", self.gravity)?;
         positive("solver.contact_tol", self.contact_tol)?;
         if self.contact_max_iter == 0 {
@@ -1756,6 +1777,21 @@ mod tests {
             Err(VtbError::Config { field, .. }) => Some(field),
             Err(e) => panic!("not a ConfigError: {e}"),
         }
+    }
+
+    #[test]
+    fn a_wheel_crossing_a_rail_end_needs_the_hand_over_set() {
+        // The article car started 5 m before the rail: its wheels cross x = 0 at 80 m/s.
+        let mut cfg = crate::presets::paper();
+        cfg.vehicles[0].x_front = -5.0;
+        assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
+        cfg.solver.edge_ramp = Some(0.0); // the step, on request (the hybrid takes no ramp)
+        assert_eq!(refused_field(&cfg), None);
+        // Wheels that stay off the rail for the whole run need nothing.
+        cfg.solver.edge_ramp = None;
+        cfg.vehicles[0].x_front = -500.0;
+        cfg.solver.t_end = Some(0.1);
+        assert_eq!(refused_field(&cfg), None);
     }
 
     #[test]
