@@ -3,6 +3,7 @@ model it reduces: static compliance, receptances, a coupled run with dampers, ba
 disk cache and bad input. A one-span version of the converged preset keeps CI short; the
 160 m verification is docs/synthesis.md (benches/synthesis_verification.py)."""
 
+import json
 import math
 import warnings
 
@@ -200,7 +201,7 @@ def test_a_tid_sweep_runs_on_the_synthesis_with_each_cases_own_result():
         assert col["rail_acc_max"][j] == vtb.simulate(one).metrics()["rail_acc_max"]
 
 
-def test_the_cache_key_is_the_structures_alone():
+def test_the_cache_key_is_the_structures_alone(monkeypatch):
     """Dampers, vehicles, speed, excitation, solver and plausibility opt-outs share one
     reduction; a structural change does not."""
     c = one_span()
@@ -209,6 +210,13 @@ def test_the_cache_key_is_the_structures_alone():
     d.speed, d.solver.dt, d.accept_implausible = 60.0, 3e-5, ["speed"]
     d.irregularity = vtb.Irregularity(kind="none")
     assert synthesis.cache_key(c) == synthesis.cache_key(d)
+    # Nor does a field added to the solver: the key holds no solver at all.
+    from vtb import track
+
+    key, real = synthesis.cache_key(c), track._structure_json
+    monkeypatch.setattr(track, "_structure_json", lambda cfg: json.dumps({**json.loads(real(cfg)), "solver": {"new_field": 1.0}}))
+    assert synthesis.cache_key(c) == key
+    monkeypatch.undo()
     e = c.copy()
     e.structure.couplings[0].stiffness *= 1.01
     assert synthesis.cache_key(e) != synthesis.cache_key(c)

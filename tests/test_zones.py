@@ -74,7 +74,7 @@ def test_wheels_off_the_structure_run_on_a_rigid_track():
     v = cfg.vehicles[0]
     static = (v.m_c / 4 + v.m_t / 2 + v.m_w) * cfg.solver.gravity / v.rails
     x_lead = v.x_front + cfg.speed * r.t
-    away = x_lead < -(cfg.solver.edge_ramp or 0.0)
+    away = x_lead < -cfg.solver.edge_ramp
     assert away.sum() > 100
     np.testing.assert_allclose(r.contact_force[away], static, rtol=1e-9)
     assert np.all(r.disp[away] == 0.0)
@@ -85,7 +85,7 @@ def test_the_tail_ends_the_run_after_the_last_wheel_leaves():
     (L − x_rear)/v + tail (whole steps)."""
     cfg = vtb.paper_config()
     cfg.solver.tail = 0.05
-    cfg.solver.edge_ramp = 0.0  # the hybrid's wheels leave the rail without a hand-over
+    cfg.solver.edge_step = True  # the hybrid's wheels leave the rail without a hand-over
     v = cfg.vehicles[0]
     want = (cfg.structure.length - (v.x_front - v.length)) / cfg.speed + 0.05
     dt = cfg.solver.dt
@@ -251,9 +251,9 @@ def test_a_wheel_crossing_a_rail_end_needs_a_hand_over():
     """A train started before a bare structure crosses the rail's start. Without a hand-over its
     wheels meet the track's static deflection as a step: on a smooth rail the second car's
     wheels all but lose contact and strike back at 1.46–1.65 × their static load, an
-    artefact. So an unset solver.edge_ramp refuses such a run (naming the vehicle); 10 m
-    (vtb.track_zones') keeps every wheel within 6.5 % of its static load; 0 keeps the step
-    on request."""
+    artefact. So with no hand-over (solver.edge_ramp = 0, the default) such a run is refused,
+    naming the vehicle; 10 m (vtb.track_zones') keeps every wheel within 6.5 % of its static
+    load; solver.edge_step keeps the step on request."""
     cfg = vtb.paper_config(model="fast")
     cfg.irregularity = vtb.Irregularity()
     cfg.vehicles = vtb.train("crh3", cars=2, x_front=cfg.vehicles[0].x_front)
@@ -262,8 +262,8 @@ def test_a_wheel_crossing_a_rail_end_needs_a_hand_over():
         cfg.validate()
     static = np.repeat([(v.m_c / 4 + v.m_t / 2 + v.m_w) * cfg.solver.gravity / v.rails for v in cfg.vehicles], 4)
     forces = {}
-    for ramp in (10.0, 0.0):
-        cfg.solver.edge_ramp = ramp
+    for ramp, step in ((10.0, False), (0.0, True)):
+        cfg.solver.edge_ramp, cfg.solver.edge_step = ramp, step
         forces[ramp] = vtb.simulate(cfg, progress=False).contact_force / static
     assert np.all(np.abs(forces[10.0] - 1.0) < 0.08)
     assert forces[0.0][:, 4:].min() < 0.05 and forces[0.0][:, 4:].max() > 1.4

@@ -131,6 +131,10 @@ def cache_key(config: Config) -> str:
         raise config_error("discretisation.synthesis_cutoff", None, "the configuration does not ask for the synthesis")
     structure = json.loads(_structure_json(_structure_config(config)))
     structure.pop("accept_implausible", None)  # an opt-out changes no matrix
+    # The neutral loads, solver and outputs the structure is assembled with are constants; left
+    # in, every field added to them would orphan every cached reduction.
+    for neutral in ("vehicles", "forces", "speed", "solver", "output"):
+        structure.pop(neutral, None)
     text = json.dumps({"format": FORMAT, "structure": structure,
                        "cutoff": float(cutoff), "basis_ratio": BASIS_RATIO, "reach": RESIDUAL_REACH}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()

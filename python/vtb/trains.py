@@ -59,7 +59,8 @@ def train(name: str = "crh3", cars: Optional[int] = None, x_front: float = 0.0, 
     x_front
         Position (m) of the leading wheelset at t = 0. Cars may start before the structure
         (x < 0): off it they run on a rigid track, and a wheel that crosses an end of the rail
-        needs ``solver.edge_ramp`` (:func:`vtb.track_zones` sets it) or the run is refused.
+        needs ``solver.edge_ramp`` (:func:`vtb.track_zones` sets it) or ``solver.edge_step``,
+        or the run is refused.
     **fields
         Vehicle fields set on every car, e.g. ``contact_patch=True`` or ``rails=2``.
 

@@ -381,12 +381,15 @@ pub struct SolverConfig {
     /// rail and the rigid track beyond the structure: the rail carries a raised-cosine share
     /// of it, 0 at the rail's end and 1 at `edge_ramp` from it, so that wheels join and leave
     /// the structure without a step (docs/zones.md; `vtb.track_zones` sets 10 m). 0: no
-    /// hand-over, a wheel crossing an end meets the track's static deflection as a step.
-    /// Unset (the default): no hand-over, and a wheel that would cross an end of the rail
-    /// during the run is refused, since that step is a spurious impact unless asked for.
-    /// Finite-element or modal rails.
+    /// hand-over, and a wheel that would cross an end of the rail during the run is refused
+    /// unless `edge_step` asks for the step it meets there. Finite-element or modal rails.
+    #[serde(default = "default_edge_ramp")]
+    pub edge_ramp: f64,
+    /// true/false: with `edge_ramp` = 0, let wheels cross an end of the rail and meet the
+    /// track's static deflection there as a step (an impact no real track has; the FE–SEA
+    /// hybrid, which takes no ramp, needs it for wheels that leave the rail).
     #[serde(default)]
-    pub edge_ramp: Option<f64>,
+    pub edge_step: bool,
     /// Distance kept between the leading wheel and the end of the structure for the default
     /// end time (m).
     #[serde(default = "default_end_margin")]
@@ -422,6 +425,9 @@ pub struct SolverConfig {
 fn default_dt() -> f64 {
     5e-5
 }
+fn default_edge_ramp() -> f64 {
+    0.0
+}
 fn default_end_margin() -> f64 {
     1.0
 }
@@ -448,7 +454,8 @@ impl Default for SolverConfig {
             dt: default_dt(),
             t_end: None,
             tail: None,
-            edge_ramp: None,
+            edge_ramp: default_edge_ramp(),
+            edge_step: false,
             end_margin: default_end_margin(),
             fade_in: default_fade_in(),
             gravity: default_gravity(),
@@ -1018,10 +1025,10 @@ impl Config {
         let sv = &self.solver;
         sv.validate()?;
         let dt = sv.dt;
-        if sv.edge_ramp.is_some_and(|r| r > 0.0) && self.discretisation.method == Method::Hybrid {
+        if sv.edge_ramp > 0.0 && self.discretisation.method == Method::Hybrid {
             return Err(VtbError::config(
                 "solver.edge_ramp",
-                sv.edge_ramp.unwrap_or(0.0),
+                sv.edge_ramp,
                 "the FE–SEA hybrid's rail terms take a wheel's whole force: use 0, or \
                  discretisation.method = \"fem\" or \"modal\"",
             ));
@@ -1095,7 +1102,7 @@ impl Config {
                     ),
                 ));
             }
-            if self.solver.edge_ramp.is_none() {
+            if self.solver.edge_ramp == 0.0 && !self.solver.edge_step {
                 let (a, b) = self.extent(0);
                 let crosses = |x: f64| offs.iter().any(|&w| w < x - 1e-9 && w + travel > x + 1e-9);
                 if let Some((end, x)) = [("start", a), ("end", b)]
@@ -1109,7 +1116,8 @@ impl Config {
                             "a wheel of this vehicle crosses the rail's {end} at x = {x} m during the run, where it \
                              would meet the track's static deflection as a step (a spurious impact): set \
                              solver.edge_ramp (m) to hand its force over between rail and rigid track \
-                             (vtb.track_zones uses 10), or 0 to keep the step, or keep the vehicles on the rail"
+                             (vtb.track_zones uses 10), or solver.edge_step = true to keep the step, or keep \
+                             the vehicles on the rail"
                         ),
                     ));
                 }
@@ -1709,9 +1717,7 @@ impl SolverConfig {
     pub fn validate(&self) -> Result<()> {
         let dt = positive("solver.dt", self.dt)?;
         non_negative("solver.end_margin", self.end_margin)?;
-        if let Some(r) = self.edge_ramp {
-            non_negative("solver.edge_ramp", r)?;
-        }
+        non_negative("solver.edge_ramp", self.edge_ramp)?;
         non_negative("solver.gravity", self.gravity)?;
         positive("solver.contact_tol", self.contact_tol)?;
         if self.contact_max_iter == 0 {
@@ -1785,10 +1791,10 @@ mod tests {
         let mut cfg = crate::presets::paper();
         cfg.vehicles[0].x_front = -5.0;
         assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
-        cfg.solver.edge_ramp = Some(0.0); // the step, on request (the hybrid takes no ramp)
+        cfg.solver.edge_step = true; // the step, on request (the hybrid takes no ramp)
         assert_eq!(refused_field(&cfg), None);
         // Wheels that stay off the rail for the whole run need nothing.
-        cfg.solver.edge_ramp = None;
+        cfg.solver.edge_step = false;
         cfg.vehicles[0].x_front = -500.0;
         cfg.solver.t_end = Some(0.1);
         assert_eq!(refused_field(&cfg), None);

@@ -106,7 +106,7 @@ impl Structure {
             fesea,
             dampers: Vec::new(),
             base: None,
-            edge_ramp: cfg.solver.edge_ramp.unwrap_or(0.0),
+            edge_ramp: cfg.solver.edge_ramp,
         };
         let [m, k, c] = [am, ak, ac].map(Assembler::finish);
         structure.dampers = structure.damper_attachments(cfg, n_layers);
@@ -486,7 +486,7 @@ mod tests {
     fn wheels_hand_their_force_over_at_the_rail_ends() {
         let mut cfg = crate::presets::paper();
         cfg.discretisation.method = Method::Modal;
-        cfg.solver.edge_ramp = Some(8.0);
+        cfg.solver.edge_ramp = 8.0;
         let st = Structure::build(&cfg).unwrap();
         let l = st.length;
         for (x, want) in [
