@@ -88,6 +88,7 @@ def edges() -> None:
             cfg.output.points = [80.0]
             cfg.solver.fade_in = 0.0
             cfg.solver.edge_ramp = ramp
+            cfg.solver.edge_step = ramp == 0.0  # the step, asked for
             cfg.solver.t_end = 0.2
             r = vtb.simulate(cfg, progress=False)
             x = x_front + cfg.speed * r.t

@@ -252,8 +252,9 @@ def test_a_wheel_crossing_a_rail_end_needs_a_hand_over():
     wheels meet the track's static deflection as a step: on a smooth rail the second car's
     wheels all but lose contact and strike back at 1.46–1.65 × their static load, an
     artefact. So with no hand-over (solver.edge_ramp = 0, the default) such a run is refused,
-    naming the vehicle; 10 m (vtb.track_zones') keeps every wheel within 6.5 % of its static
-    load; solver.edge_step keeps the step on request."""
+    naming the vehicle; a 10 m hand-over keeps every wheel within 6.5 % of its static load
+    (here on the bridge itself; vtb.track_zones puts it on an embankment); solver.edge_step
+    keeps the step on request."""
     cfg = vtb.paper_config(model="fast")
     cfg.irregularity = vtb.Irregularity()
     cfg.vehicles = vtb.train("crh3", cars=2, x_front=cfg.vehicles[0].x_front)

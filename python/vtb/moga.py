@@ -1071,7 +1071,7 @@ def saved_identity(path: Path):
     try:
         with np.load(path, allow_pickle=False) as z:
             return json.loads(str(z["header"])).get("identity")
-    except (OSError, EOFError, ValueError, KeyError, AttributeError, zipfile.BadZipFile):
+    except (OSError, EOFError, ValueError, KeyError, AttributeError, TypeError, zipfile.BadZipFile):
         return None
 
 
@@ -1082,7 +1082,7 @@ def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tupl
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(str(z["header"]))
             state = {k: z[k] for k in z.files if k != "header"}
-    except (OSError, EOFError, ValueError, KeyError, zipfile.BadZipFile) as e:
+    except (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
         raise config_error("checkpoint", str(path), f"is not a readable vtb.moga checkpoint ({type(e).__name__}: {e})") from None
     if not isinstance(header, dict) or header.get("format") != _CHECKPOINT_FORMAT:
         raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")

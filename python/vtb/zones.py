@@ -52,7 +52,9 @@ def track_zones(config: Config, approach: float = 50.0, exit: float = 50.0,
     Vehicles may start before x = 0 and end beyond the structure: off it they run on a rigid
     track, and over the first and last ``edge_ramp`` m of the embankments (``solver.edge_ramp``)
     their forces pass smoothly between that rigid track and the modelled one (docs/zones.md
-    measures the transient); each embankment must be at least that long.
+    measures the transient); each embankment must be at least that long. ``edge_ramp = 0``
+    hands nothing over: a vehicle crossing the track's ends is then refused unless
+    ``solver.edge_step`` asks for the step.
 
     Needs a finite-element structure (the bridge covers part of it) whose upper layers span
     the whole length. Raises :class:`vtb.ConfigError` naming the argument or field."""

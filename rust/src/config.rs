@@ -374,7 +374,8 @@ pub struct SolverConfig {
     pub t_end: Option<f64>,
     /// Free vibration (s) recorded after the last wheel or force has left the structure
     /// (passed x = L): the default end time becomes that moment plus `tail`. Wheels beyond
-    /// x = L run on a rigid track and no longer load the structure.
+    /// x = L run on a rigid track and no longer load the structure; as they cross the rail's
+    /// end, a tail needs `edge_ramp` (or `vtb.track_zones`) or `edge_step`.
     #[serde(default)]
     pub tail: Option<f64>,
     /// Length (m) at each end of the rail over which a wheel's force is handed between the
@@ -1029,7 +1030,8 @@ impl Config {
             return Err(VtbError::config(
                 "solver.edge_ramp",
                 sv.edge_ramp,
-                "the FE–SEA hybrid's rail terms take a wheel's whole force: use 0, or \
+                "the FE–SEA hybrid's rail terms take a wheel's whole force: use 0 (with \
+                 solver.edge_step = true for wheels that cross an end of the rail), or \
                  discretisation.method = \"fem\" or \"modal\"",
             ));
         }
@@ -1104,19 +1106,40 @@ impl Config {
             }
             if self.solver.edge_ramp == 0.0 && !self.solver.edge_step {
                 let (a, b) = self.extent(0);
-                let crosses = |x: f64| offs.iter().any(|&w| w < x - 1e-9 && w + travel > x + 1e-9);
-                if let Some((end, x)) = [("start", a), ("end", b)]
-                    .into_iter()
-                    .find(|&(_, x)| crosses(x))
-                {
+                // The engine's rule (`Structure::edge_share`): a wheel is on the rail for a ≤ x ≤ b.
+                // Where it ends may exceed an end by rounding (t_end = L/v reaches x = L in
+                // n·Δt), which crosses nothing.
+                let on = |x: f64| a <= x && x <= b;
+                let crossing = offs.iter().find_map(|&w| {
+                    let end = w + travel;
+                    let end = if (end - b).abs() <= 1e-9 * b.abs().max(1.0) {
+                        end.min(b)
+                    } else {
+                        end
+                    };
+                    if !on(w) && on(end) || w < a && end > b {
+                        Some(("start", a))
+                    } else if on(w) && !on(end) {
+                        Some(("end", b))
+                    } else {
+                        None
+                    }
+                });
+                if let Some((which, x)) = crossing {
+                    let tail = if which == "end" && self.solver.tail.is_some() {
+                        " (solver.tail runs the vehicles off it)"
+                    } else {
+                        ""
+                    };
                     return Err(VtbError::config(
                         format!("{p}.x_front"),
                         v.x_front,
                         format!(
-                            "a wheel of this vehicle crosses the rail's {end} at x = {x} m during the run, where it \
-                             would meet the track's static deflection as a step (a spurious impact): set \
-                             solver.edge_ramp (m) to hand its force over between rail and rigid track \
-                             (vtb.track_zones uses 10), or solver.edge_step = true to keep the step, or keep \
+                            "a wheel of this vehicle crosses the rail's {which} at x = {x} m during the run{tail}, \
+                             where it would meet the track's static deflection as a step (a spurious impact): model \
+                             the track beyond with vtb.track_zones (embankments with a 10 m hand-over), or set \
+                             solver.edge_ramp (m; on a bare structure the hand-over lies on the bridge), or \
+                             solver.edge_step = true to keep the step (the FE–SEA hybrid's only choice), or keep \
                              the vehicles on the rail"
                         ),
                     ));
@@ -1718,6 +1741,16 @@ impl SolverConfig {
         let dt = positive("solver.dt", self.dt)?;
         non_negative("solver.end_margin", self.end_margin)?;
         non_negative("solver.edge_ramp", self.edge_ramp)?;
+        if self.edge_step && self.edge_ramp > 0.0 {
+            return Err(VtbError::config(
+                "solver.edge_step",
+                true,
+                format!(
+                    "asks for the step of a rail end without a hand-over, but edge_ramp = {} m hands the force over",
+                    self.edge_ramp
+                ),
+            ));
+        }
         non_negative("solver.gravity", self.gravity)?;
         positive("solver.contact_tol", self.contact_tol)?;
         if self.contact_max_iter == 0 {
@@ -1793,8 +1826,11 @@ mod tests {
         assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
         cfg.solver.edge_step = true; // the step, on request (the hybrid takes no ramp)
         assert_eq!(refused_field(&cfg), None);
+        cfg.solver.edge_ramp = 5.0; // a step and a hand-over at once: refused
+        assert_eq!(refused_field(&cfg).as_deref(), Some("solver.edge_step"));
         // Wheels that stay off the rail for the whole run need nothing.
         cfg.solver.edge_step = false;
+        cfg.solver.edge_ramp = 0.0;
         cfg.vehicles[0].x_front = -500.0;
         cfg.solver.t_end = Some(0.1);
         assert_eq!(refused_field(&cfg), None);
