@@ -1,5 +1,7 @@
 """The vtb command: help on every subcommand, and the quick reproduction (what CI runs)."""
 
+import json
+
 import pytest
 
 import vtb
@@ -57,7 +59,9 @@ def test_reproduce_quick(tmp_path):
     # aside and reruns, reusing the sweep journal, which still matches.
     journal = next(out.glob("optimisation_warm_*.designs.jsonl"))
     identity, *rest = journal.read_text().splitlines()
-    journal.write_text("\n".join([identity.replace('"config": "', '"config": "0'), *rest]) + "\n")
+    stamped = json.loads(identity)
+    stamped["vtb.optimize"]["config"]["speed"] += 1.0
+    journal.write_text("\n".join([json.dumps(stamped), *rest]) + "\n")
     sweep = (out / "sweep.csv").read_text()
     assert cli.main(["reproduce", "--out", str(out), "--quick", "--no-progress", "--force"]) == 0
     assert journal.with_name(journal.name + ".stale").exists() and journal.exists()
