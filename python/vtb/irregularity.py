@@ -485,7 +485,8 @@ class Irregularity(StrictFields):
         the realised fraction of the band's variance (:class:`IrregularityWarning`)."""
         parts = [q for q in (self, *self.parts) if q.kind != "none"]
         rail = [q for q in parts if q.kind != "wheel_flat"]
-        flats = [q for q in parts if q.kind == "wheel_flat"]
+        named = [("irregularity", self)] + [(f"irregularity.parts[{i}]", q) for i, q in enumerate(self.parts)]
+        flats = [(path, q) for path, q in named if q.kind == "wheel_flat"]
         radius = float(wheel_radii[0]) if len(wheel_radii) else 0.0
         if not parts:
             return 0.0, 1.0, np.zeros(0), []
@@ -500,9 +501,9 @@ class Irregularity(StrictFields):
             x0q, dxq, v = q._own(x_min, x_max, memory_budget, radius)
             values += np.interp(x, x0q + dxq * np.arange(v.size), v)
         treads = [np.zeros(0) for _ in wheel_radii] if flats else []
-        for q in flats:
+        for path, q in flats:
             r = q.wheel_radius if q.wheel_radius is not None else float(wheel_radii[q.wheel])
-            q._check_flat_length(r, "irregularity" if q is self else f"irregularity.parts[{next(i for i, p in enumerate(self.parts) if p is q)}]")
+            q._check_flat_length(r, path)
             row = treads[q.wheel] if treads[q.wheel].size else np.zeros(n)
             treads[q.wheel] = row + q._flat(x, r) * q.scale
         return float(x_min), float(dx), values, treads
