@@ -1,7 +1,7 @@
 """The complex-modal synthesis (vtb.synthesis, docs/synthesis.md) against the finite-element
 model it reduces: static compliance, receptances, a coupled run with dampers, batches, the
 disk cache and bad input. A one-span version of the converged preset keeps CI short; the
-160 m verification is docs/synthesis.md (benches/synthesis_verification.py)."""
+160 m verification is docs/synthesis-verification.md (benches/synthesis.py)."""
 
 import json
 import math
@@ -67,8 +67,9 @@ def third_octave_energy(f, a, centre):
     return np.sum(np.abs(a[m]) ** 2)
 
 
-@pytest.mark.parametrize("x", [12.8, 13.12])  # over a fastener, mid-bay
-def test_receptance_bands_match_the_finite_elements(x):
+# Over a fastener, inside the element next to it, a quarter bay on (a node) and mid-bay.
+@pytest.mark.parametrize("x", [12.8, 12.816, 12.96, 13.12])
+def test_receptance_bands_match_the_finite_elements_within_1_percent(x):
     c = one_span()
     f = np.geomspace(40.0, 2240.0, 700)
     with warnings.catch_warnings():
@@ -80,8 +81,10 @@ def test_receptance_bands_match_the_finite_elements(x):
     assert worst < BAND_TOLERANCE, worst
 
 
-#: Measured worst third-octave band of |α| between 50 Hz and 2 kHz (docs/synthesis.md).
-BAND_TOLERANCE = 0.02
+#: The verification's tolerance on every third-octave band of |α| from 50 Hz to 2 kHz. Measured
+#: ≤ 0.15 % with the residual's filter; the static residual alone missed it by 1.5–2 % over
+#: the fasteners (docs/synthesis.md, "The dynamic residual").
+BAND_TOLERANCE = 0.01
 
 
 def assert_matches_the_finite_elements(c):
@@ -167,7 +170,30 @@ def test_bad_input_names_the_field():
         with pytest.raises(vtb.ConfigError, match="discretisation.synthesis_cutoff"):
             vtb.simulate(b)
     with pytest.raises(vtb.ConfigError, match="reduction.lambda"):
-        vtb._core.Reduction(1, np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
+        vtb._core.Reduction(1, np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(3))
+    with pytest.raises(vtb.ConfigError, match="reduction.residual"):  # one moment instead of three
+        vtb._core.Reduction(1, np.array([-1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
+
+
+def test_the_setup_solver_solves_and_refuses_bad_input():
+    """The core's sparse LDLᵀ that builds the residual (vtb._core.SpdSolver) against a dense
+    solve, and its errors."""
+    rng = np.random.default_rng(5)
+    n = 30
+    a = np.diag(np.full(n, 4.0)) + np.diag(np.full(n - 1, -1.0), 1) + np.diag(np.full(n - 1, -1.0), -1)
+    a[0, n - 1] = a[n - 1, 0] = 0.5
+    r, c = np.nonzero(a)
+    solver = vtb._core.SpdSolver(n, r.astype(np.int64), c.astype(np.int64), a[r, c])
+    b = rng.standard_normal((n, 11))
+    assert np.allclose(solver.solve(b), np.linalg.solve(a, b), rtol=1e-12, atol=1e-12)
+    with pytest.raises(vtb.ConfigError, match="values"):
+        vtb._core.SpdSolver(2, np.array([0, 2]), np.array([0, 1]), np.array([1.0, 1.0]))
+    with pytest.raises(vtb.ConfigError, match="values"):
+        vtb._core.SpdSolver(1, np.array([0]), np.array([0]), np.array([float("nan")]))
+    with pytest.raises(vtb.ConfigError, match="b"):
+        solver.solve(np.zeros((n + 1, 2)))
+    with pytest.raises(vtb.SolverError):
+        vtb._core.SpdSolver(2, np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1]), np.array([1.0, -1.0, -1.0, 1.0]))
 
 
 def test_the_moving_load_mode_runs_on_the_synthesis():

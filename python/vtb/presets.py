@@ -64,7 +64,7 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
 
     ``model="fast"``: the converged model run by complex-modal synthesis (:mod:`vtb.synthesis`,
     docs/synthesis.md): its finite elements reduced once to the complex modes below 4 kHz plus
-    the rail's static residual (cached on disk), each mode stepped exactly at Δt = 5e-5 s. It
+    the rail's residual (cached on disk), each mode stepped exactly at Δt = 5e-5 s. It
     is verified against the converged model (rail and slab indices within 3 %) at a fraction
     of its cost; the first run builds the reduction (about two and a half minutes).
     """

@@ -33,6 +33,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::structure::resolved_bands, m)?)?;
     m.add_function(wrap_pyfunction!(api::structure::patch_half_length, m)?)?;
     m.add_class::<api::run::Reduction>()?;
+    m.add_class::<api::structure::SpdSolver>()?;
     m.add_function(wrap_pyfunction!(api::config::plausible_ranges, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::check_plausible, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

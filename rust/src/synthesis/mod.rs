@@ -3,24 +3,30 @@
 //! The structure is linear and shared by every job of a study; the wheels and the dampers
 //! are not, and they touch it at a few points. A [`Reduction`] holds the structure's complex
 //! modes, (λ²M + λC + K)ψ = 0 normalised to ψᵀ(2λM + C)ψ = 1 (one of each conjugate pair,
-//! weight w = 2; real modes w = 1), and the static residual flexibility of the rail, R =
-//! K⁻¹ − G_m (G_m = −Σ w·Re(ψψᵀ/λ)), as a band over the rail's DOFs. The displacement is
+//! weight w = 2; real modes w = 1), and the residual of the rail: the moments R_k of the
+//! full model's receptance about s = 0 less the kept modes' (R₀ = K⁻¹ − G₀, G_k =
+//! −Σ w·Re(ψψᵀ/λ^(k+1)); R₁, R₂ the same of −K⁻¹CK⁻¹ and K⁻¹CK⁻¹CK⁻¹ − K⁻¹MK⁻¹), as bands
+//! over the rail's DOFs. The displacement is
 //!
-//!   u = Re Σ_j ψ_j·Q_j + R·f,   Q̇_j = λ_j·Q_j + w_j·ψ_jᵀf,
+//!   u = Re Σ_j ψ_j·Q_j + R₀·g,   Q̇_j = λ_j·Q_j + w_j·ψ_jᵀf,
 //!
-//! and each Q_j is stepped exactly under a force linear over the step (`step`): no period
-//! error at any Δt. [`run_lanes`] couples the modes with the wheels (Hertz contact), the
-//! dampers (physical elements on fixed ports) and the moving forces, W jobs in lockstep.
+//! each Q_j stepped exactly under a force linear over the step (`step`): no period error at
+//! any Δt; g is each wheel's force through the filter that carries the residual's moments
+//! (`residual`). [`run_lanes`] couples the modes with the wheels (Hertz contact), the dampers
+//! (physical elements on fixed ports) and the moving forces, W jobs in lockstep.
 //!
 //! - `reduction` (this file): the modes, the residual and their checks;
+//! - `residual`: the filter of the residual under a load;
 //! - `step`: complex arithmetic, the exact step's coefficients;
 //! - `kernels`: the two passes over the modes per step (vectorised, lane-generic);
 //! - `run`: the coupled step.
 
 mod kernels;
+mod residual;
 mod run;
 mod step;
 
+pub use residual::{Filter, FilterStep};
 pub use run::{run, run_lanes};
 
 use crate::basis::Shape;
@@ -48,7 +54,8 @@ pub struct Reduction {
     psi_im: Vec<f64>,
     rail_dofs: usize,
     band: usize,
-    /// R between rail DOFs i and i + d at `[i·(band + 1) + d]`, 0 ≤ d ≤ band.
+    /// R_k between rail DOFs i and i + d at `[(k·rail_dofs + i)·(band + 1) + d]`, 0 ≤ d ≤
+    /// band, k = 0, 1, 2 (m/N, m·s/N, m·s²/N).
     residual: Vec<f64>,
     /// Each observer's force-feedthrough gains over the rail's DOFs (`gains`), by shape.
     gains: Arc<Mutex<HashMap<ShapeKey, Arc<Gains>>>>,
@@ -72,7 +79,8 @@ fn refuse(field: &str, value: impl std::fmt::Display, why: &str) -> VtbError {
 
 impl Reduction {
     /// Checks every array's length and value: finite, Re λ < 0 (a stable structure), weights
-    /// 1 (real λ) or 2 (a pair). `psi_*` are n_dofs × m, row-major.
+    /// 1 (real λ) or 2 (a pair). `psi_*` are n_dofs × m, row-major; `residual` holds the three
+    /// moments' bands one after the other.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         n_dofs: usize,
@@ -94,7 +102,7 @@ impl Reduction {
             ("weight", weight.len(), m),
             ("psi_re", psi_re.len(), n_dofs * m),
             ("psi_im", psi_im.len(), n_dofs * m),
-            ("residual", residual.len(), rail_dofs * (band + 1)),
+            ("residual", residual.len(), 3 * rail_dofs * (band + 1)),
         ] {
             if len != want {
                 return Err(refuse(name, len, &format!("needs {want} entries")));
@@ -216,9 +224,20 @@ impl Reduction {
             .collect()
     }
 
-    /// aᵀ·R·b for two shapes on the rail's DOFs (zero beyond the stored band).
+    /// aᵀ·R₀·b for two shapes on the rail's DOFs (zero beyond the stored band).
     pub fn residual(&self, a: &Shape, b: &Shape) -> f64 {
+        self.moment(0, a, b)
+    }
+
+    /// sᵀR_k s, k = 0, 1, 2, of a rail shape.
+    pub fn residual_moments(&self, s: &Shape) -> [f64; 3] {
+        std::array::from_fn(|k| self.moment(k, s, s))
+    }
+
+    /// aᵀ·R_k·b.
+    fn moment(&self, k: usize, a: &Shape, b: &Shape) -> f64 {
         let bw = self.band + 1;
+        let r = &self.residual[k * self.rail_dofs * bw..(k + 1) * self.rail_dofs * bw];
         let mut sum = 0.0;
         for (ka, &va) in a.values.iter().enumerate() {
             let i = a.start + ka;
@@ -232,7 +251,7 @@ impl Reduction {
                 }
                 let (lo, hi) = if i <= k { (i, k) } else { (k, i) };
                 if hi - lo <= self.band {
-                    sum += va * vb * self.residual[lo * bw + hi - lo];
+                    sum += va * vb * r[lo * bw + hi - lo];
                 }
             }
         }
@@ -277,7 +296,7 @@ mod tests {
                 vec![0.0; 2],
                 2,
                 0,
-                vec![0.0; 2],
+                vec![0.0; 6],
             )
             .unwrap_err();
             assert!(e.to_string().contains(field), "{e}");

@@ -7,7 +7,8 @@
 //! ([`Run::step`]): loads, wheel pass, dampers, contact, forces, update, record.
 //!
 //! Within a step the displacements at the wheels and at the dampers' ports are affine in the
-//! unknown forces through the step compliance Re Σ ψ_a·a1·ψ_b + R_ab, so the contact Newton
+//! unknown forces through the step compliance Re Σ ψ_a·a1·ψ_b + R_ab·γ_b (γ_b the step gain of
+//! load b's residual filter, `residual`; 1 for a damper's force), so the contact Newton
 //! iterates on the wheel forces alone, as in the finite-element engine. Two loads farther
 //! apart than the residual's reach (`Reduction::band` rail DOFs) have no step compliance:
 //! within one step (50 µs) no wave carries a load that far (the rail's shear wave needs
@@ -22,6 +23,7 @@
 //! dampers); `records` assembles them with the rail residual's acceleration.
 
 use super::kernels::{self, Acc, CVec, Scratch, Update, WheelPass};
+use super::residual::{Filter, FilterStep};
 use super::step::{C, Coefficients};
 use super::{Gains, Reduction};
 use crate::basis::Shape;
@@ -213,13 +215,27 @@ struct Run<'a, const W: usize> {
     rail_acc: Vec<Acc<W>>,
     rail_free: Vec<[f64; W]>,
     element_flex: Vec<f64>,
+    /// The wheels' residual filters this step, each lane's filter states (g, ġ) `[lane·nw +
+    /// wheel]` at the step's start, their values at its end under no new force (`g_free`) and
+    /// per unit new force (`g_gain`, shared), and the filtered forces g at its end (`g_now`).
+    filters: Vec<FilterStep>,
+    /// sᵀR₀s of each wheel this step.
+    self_res: Vec<f64>,
+    g_state: Vec<[f64; 2]>,
+    g_free: Vec<[f64; 2]>,
+    g_gain: Vec<[f64; 2]>,
+    g_now: Vec<f64>,
+    /// Near wheel pairs `[wi·nw + vi]`, wi < vi: the modes' step compliance and R₀ between them.
     near_pairs: Vec<f64>,
+    near_res: Vec<f64>,
     /// a1·ψ of a wheel (scratch of the near pairs' compliance).
     scaled_port: CVec,
     /// Per observer and wheel this step: the rail gains at the wheel's shape (λw, w).
     wheel_gains: Vec<[f64; 2]>,
     mover_direct: Vec<[f64; 2]>,
+    /// Damper e's port and wheel w `[e·nw + w]`: the modes' step compliance and R₀.
     gdw: Vec<f64>,
+    gdw_res: Vec<f64>,
     t_mat: Vec<f64>,
     f0: Vec<f64>,
     tmp: Vec<f64>,
@@ -488,11 +504,19 @@ impl<'a, const W: usize> Run<'a, W> {
             rail_acc: vec![Acc::ZERO; nw],
             rail_free: vec![[0.0; W]; nw],
             element_flex: vec![0.0; nw],
+            filters: vec![FilterStep::pass(dt); nw],
+            self_res: vec![0.0; nw],
+            g_state: vec![[0.0; 2]; W * nw],
+            g_free: vec![[0.0; 2]; W * nw],
+            g_gain: vec![[0.0; 2]; nw],
+            g_now: vec![0.0; W * nw],
             near_pairs: vec![0.0; nw * nw],
+            near_res: vec![0.0; nw * nw],
             scaled_port: CVec::zeros(n),
             wheel_gains: vec![[0.0; 2]; no * nw],
             mover_direct: vec![[0.0; 2]; no],
             gdw: vec![0.0; nd * nw],
+            gdw_res: vec![0.0; nd * nw],
             t_mat: vec![0.0; W * nd * nw],
             f0: vec![0.0; W * nd],
             tmp: vec![0.0; nd],
@@ -549,7 +573,7 @@ impl<'a, const W: usize> Run<'a, W> {
             .sum()
     }
 
-    /// The rail's residual displacement at s under wheel forces p.
+    /// The rail's residual displacement at s under the wheels' filtered forces g.
     fn wheel_residual(&self, s: &Shape, p: &[f64]) -> f64 {
         self.wheel_shapes
             .iter()
@@ -613,6 +637,13 @@ impl<'a, const W: usize> Run<'a, W> {
             }
         }
         let share = if rest { 0.0 } else { 1.0 };
+        // The residual filters at rest under the loads (g = F) or, at rest, empty.
+        for c in 0..W {
+            for w in 0..nw {
+                self.g_state[c * nw + w] = [share * self.loads[w], 0.0];
+                self.g_now[c * nw + w] = share * self.loads[w];
+            }
+        }
         let static_residual =
             |s: &Shape| share * (self.wheel_residual(s, &self.loads) + self.mover_residual(s));
         let d0: Vec<f64> = (0..self.dampers.len())
@@ -717,9 +748,38 @@ impl<'a, const W: usize> Run<'a, W> {
                 rail: &mut self.rail_acc,
             },
         );
+        let (dt, wpc) = (cfg.solver.dt, self.wpc);
+        let mut failed = None;
         for w in 0..nw {
             let s = &self.wheel_shapes[w];
-            self.diag[w] = self.diag_acc[w].sum()[0] + red.residual(s, s);
+            let x = self.wheel_x0[w] + cfg.speed * t1;
+            let moments = if self.active[w] {
+                red.residual_moments(s)
+            } else {
+                [0.0; 3]
+            };
+            self.self_res[w] = moments[0];
+            let filter = Filter::from_moments(moments, || {
+                format!(
+                    "vehicles[{}] wheel {} at x = {x:.4} m",
+                    w / wpc,
+                    w % wpc + 1
+                )
+            });
+            self.filters[w] = match filter {
+                Ok(Some(f)) => f.step(dt),
+                Ok(None) => FilterStep::pass(dt),
+                Err(e) => {
+                    failed = Some(e);
+                    FilterStep::pass(dt)
+                }
+            };
+            self.g_gain[w] = self.filters[w].advance([0.0; 2], 0.0, 1.0);
+            for c in 0..W {
+                let i = c * nw + w;
+                self.g_free[i] = self.filters[w].advance(self.g_state[i], self.p[i], 0.0);
+            }
+            self.diag[w] = self.diag_acc[w].sum()[0] + moments[0] * self.g_gain[w][0];
             self.rail_free[w] = self.rail_acc[w].sum();
             self.element_flex[w] = if cfg.discretisation.element_flexibility {
                 st.wheel_flexibility(self.wheel_x0[w] + cfg.speed * t1, self.patch[w])
@@ -733,24 +793,53 @@ impl<'a, const W: usize> Run<'a, W> {
             let mut scaled = false;
             for vi in wi + 1..nw {
                 let (a, b) = (&self.wheel_shapes[wi], &self.wheel_shapes[vi]);
-                self.near_pairs[wi * nw + vi] =
+                (self.near_pairs[wi * nw + vi], self.near_res[wi * nw + vi]) =
                     if self.active[wi] && self.active[vi] && near(red, a, b) {
                         if !scaled {
                             self.scaled_port.set_mul(a1, &self.ports[wi]);
                             scaled = true;
                         }
-                        dot(&self.scaled_port, &self.ports[vi]) + red.residual(a, b)
+                        (dot(&self.scaled_port, &self.ports[vi]), red.residual(a, b))
                     } else {
-                        0.0
+                        (0.0, 0.0)
                     };
             }
         }
         for (e, dp) in self.dampers.iter().enumerate() {
             for (w, sw) in self.wheel_shapes.iter().enumerate() {
-                self.gdw[e * nw + w] =
-                    shape_gain(sw, dp.gain_start, &dp.gain) + red.residual(&dp.upper, sw);
+                self.gdw[e * nw + w] = shape_gain(sw, dp.gain_start, &dp.gain);
+                self.gdw_res[e * nw + w] = red.residual(&dp.upper, sw);
             }
         }
+        if let Some(e) = failed {
+            for c in 0..W {
+                if self.lanes[c].error.is_none() {
+                    self.fail(c, e.clone());
+                }
+            }
+        }
+    }
+
+    /// R₀ between near wheels w ≠ v (zero when not near).
+    fn near_residual(&self, w: usize, v: usize) -> f64 {
+        let nw = self.nw();
+        self.near_res[w.min(v) * nw + w.max(v)]
+    }
+
+    /// The rail's residual displacement at wheel w of lane c under the wheels' filtered forces
+    /// at the step's end with no new force.
+    fn wheel_residual_free(&self, w: usize, c: usize) -> f64 {
+        let nw = self.nw();
+        (0..nw)
+            .map(|v| {
+                let r = if v == w {
+                    self.self_res[w]
+                } else {
+                    self.near_residual(w, v)
+                };
+                r * self.g_free[c * nw + v][0]
+            })
+            .sum()
     }
 
     /// Each lane's dampers this step: their force F = F0 + T·P in the wheel forces P.
@@ -765,14 +854,19 @@ impl<'a, const W: usize> Run<'a, W> {
                 continue;
             }
             for e in 0..nd {
-                let free = self.damper_free[e][c] + self.mover_residual(&self.dampers[e].upper);
+                let wheels: f64 = (0..nw)
+                    .map(|w| self.gdw_res[e * nw + w] * self.g_free[c * nw + w][0])
+                    .sum();
+                let free =
+                    self.damper_free[e][c] + self.mover_residual(&self.dampers[e].upper) + wheels;
                 let d = &mut self.lanes[c].dampers[e];
                 for i in 0..2 {
                     d.offsets[i] = d.states[i].offset(&d.branches[i], dt);
                 }
                 self.f0[c * nd + e] = d.kappa * (free - d.offsets[0] - d.offsets[1]);
                 for w in 0..nw {
-                    self.t_mat[(c * nd + e) * nw + w] = d.kappa * self.gdw[e * nw + w];
+                    let g = self.gdw[e * nw + w] + self.gdw_res[e * nw + w] * self.g_gain[w][0];
+                    self.t_mat[(c * nd + e) * nw + w] = d.kappa * g;
                 }
             }
             // F0 ← S⁻¹·F0, T ← S⁻¹·T.
@@ -806,10 +900,14 @@ impl<'a, const W: usize> Run<'a, W> {
             for c in 0..W {
                 for w in 0..self.wpc {
                     let wi = ci * self.wpc + w;
-                    let mut rail =
-                        self.rail_free[wi][c] + self.mover_residual(&self.wheel_shapes[wi]);
+                    let mut rail = self.rail_free[wi][c]
+                        + self.mover_residual(&self.wheel_shapes[wi])
+                        + self.wheel_residual_free(wi, c);
+                    // The dampers' forces reach the wheel through the static residual (they
+                    // have no filter).
                     for e in 0..nd {
-                        rail -= self.gdw[e * nw + wi] * self.f0[c * nd + e];
+                        rail -= (self.gdw[e * nw + wi] + self.gdw_res[e * nw + wi])
+                            * self.f0[c * nd + e];
                     }
                     let x = self.wheel_x0[wi] + v * t1;
                     self.delta_free[c * nw + wi] =
@@ -820,15 +918,20 @@ impl<'a, const W: usize> Run<'a, W> {
         for c in 0..W {
             let a = &mut self.amat[c * nw * nw..(c + 1) * nw * nw];
             let t_mat = &self.t_mat[c * nd * nw..(c + 1) * nd * nw];
+            // Row wi: the displacement at wheel wi per unit force of wheel vi, whose residual
+            // share passes vi's filter (so A is not symmetric).
             for wi in 0..nw {
-                for vi in wi..nw {
+                for vi in 0..nw {
                     let mut x = if wi == vi {
                         self.diag[wi] + self.element_flex[wi]
                     } else {
-                        self.near_pairs[wi * nw + vi]
+                        let (lo, hi) = (wi.min(vi), wi.max(vi));
+                        self.near_pairs[lo * nw + hi]
+                            + self.near_res[lo * nw + hi] * self.g_gain[vi][0]
                     };
                     for e in 0..nd {
-                        x -= self.gdw[e * nw + wi] * t_mat[e * nw + vi];
+                        x -= (self.gdw[e * nw + wi] + self.gdw_res[e * nw + wi])
+                            * t_mat[e * nw + vi];
                     }
                     let (ci, cj) = (wi / self.wpc, vi / self.wpc);
                     if ci == cj {
@@ -836,7 +939,6 @@ impl<'a, const W: usize> Run<'a, W> {
                         x += car.car.rails * car.compliance[wi % self.wpc][vi % self.wpc];
                     }
                     a[wi * nw + vi] = x;
-                    a[vi * nw + wi] = x;
                 }
             }
         }
@@ -866,7 +968,14 @@ impl<'a, const W: usize> Run<'a, W> {
         let (nw, nd) = (self.nw(), self.dampers.len());
         for c in 0..W {
             for w in 0..nw {
-                self.forces[w][c] = self.p[c * nw + w];
+                let i = c * nw + w;
+                self.forces[w][c] = self.p[i];
+                let (free, gain) = (self.g_free[i], self.g_gain[w]);
+                self.g_state[i] = [
+                    gain[0].mul_add(self.p[i], free[0]),
+                    gain[1].mul_add(self.p[i], free[1]),
+                ];
+                self.g_now[i] = self.g_state[i][0];
             }
             if self.lanes[c].error.is_some() {
                 for e in 0..nd {
@@ -953,6 +1062,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 continue;
             }
             let pl = &self.p[c * nw..(c + 1) * nw];
+            let gl = &self.g_now[c * nw..(c + 1) * nw];
             for (o, obs) in self.observers.iter().enumerate() {
                 // z = Re Σ ψᵀs·λw·g and y = Re Σ ψᵀs·w·g, g = Σ ports' forces·ψᵀ(port).
                 let mut zy = self.mover_direct[o];
@@ -973,7 +1083,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 ]);
                 if let Some(s) = &obs.rail_shape {
                     self.lanes[c].residual[step * n_rail + o] =
-                        self.wheel_residual(s, pl) + self.mover_residual(s);
+                        self.wheel_residual(s, gl) + self.mover_residual(s);
                 }
             }
             let r = &mut self.res[c];
@@ -1010,6 +1120,8 @@ impl<'a, const W: usize> Run<'a, W> {
         self.lanes[c].error = Some(e);
         self.q_free[c].clear();
         self.p[c * nw..(c + 1) * nw].fill(0.0);
+        self.g_state[c * nw..(c + 1) * nw].fill([0.0; 2]);
+        self.g_now[c * nw..(c + 1) * nw].fill(0.0);
         for car in &mut self.cars {
             car.nm.clear_lane(c);
         }
@@ -1052,7 +1164,7 @@ fn padded(n: usize, f: impl Fn(usize) -> f64) -> Vec<f64> {
 ///
 /// The modes' response to the piecewise-linear force through the force samples is the true
 /// response low-passed by sinc²(ωh/2) at every sample, and so is the second difference D₂ of
-/// the exact quasi-static residual: the zero-phase FIR E = (−1, 14, −1)/12, whose gain
+/// the residual's samples: the zero-phase FIR E = (−1, 14, −1)/12, whose gain
 /// 1 + (1 − cos ωh)/6 is 1/sinc²(ωh/2) to O((ωh)⁴) (0.2 % at 2 kHz, h = 5e-5 s), equalises
 /// them. The force samples themselves are exact (z), and the force-rate term w·ġ is the
 /// fourth-order central difference D₁ of y.

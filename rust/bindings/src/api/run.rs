@@ -70,6 +70,22 @@ impl Reduction {
         let s = vtb::basis::Shape { start, values };
         self.0.static_flexibility(&s, &s)
     }
+
+    /// (α, β) of the residual's filter 1/(1 + αs + βs²) under a load of rail shape (start,
+    /// values), as the engine steps it; `None` where there is no residual.
+    fn residual_filter(
+        &self,
+        py: Python<'_>,
+        start: usize,
+        values: Vec<f64>,
+    ) -> PyResult<Option<(f64, f64)>> {
+        let s = vtb::basis::Shape { start, values };
+        vtb::synthesis::Filter::from_moments(self.0.residual_moments(&s), || {
+            format!("a load at rail DOF {start}")
+        })
+        .map(|f| f.map(|f| (f.alpha, f.beta)))
+        .map_err(|e| to_py_err(py, e))
+    }
 }
 
 /// Runs one configuration; returns a dict of histories and metrics. `progress(done, total)`

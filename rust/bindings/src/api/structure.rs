@@ -3,7 +3,9 @@
 
 use crate::convert::parse_config;
 use crate::errors::to_py_err;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -205,4 +207,69 @@ pub(crate) fn patch_half_length(
         wheel_radius,
         rail_radius,
     ))
+}
+
+/// A sparse symmetric positive definite matrix factorised once (LDLᵀ, approximate minimum
+/// degree ordering), for setup work with many right-hand sides (the synthesis's residual).
+#[pyclass(frozen, module = "vtb._core")]
+pub(crate) struct SpdSolver(vtb::linalg::sparse::Ldlt);
+
+#[pymethods]
+impl SpdSolver {
+    /// From COO triplets of the whole matrix (both triangles; duplicates are summed).
+    #[new]
+    fn new(
+        py: Python<'_>,
+        n: usize,
+        rows: PyReadonlyArray1<'_, i64>,
+        cols: PyReadonlyArray1<'_, i64>,
+        values: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let (rows, cols, values) = (rows.as_array(), cols.as_array(), values.as_array());
+        if rows.len() != values.len() || cols.len() != values.len() {
+            return Err(to_py_err(
+                py,
+                VtbError::config("rows", rows.len(), "rows, cols and values differ in length"),
+            ));
+        }
+        let mut a = vtb::linalg::sparse::Assembler::new(n);
+        for ((&i, &j), &v) in rows.iter().zip(cols.iter()).zip(values.iter()) {
+            if !(0..n as i64).contains(&i) || !(0..n as i64).contains(&j) || !v.is_finite() {
+                return Err(to_py_err(
+                    py,
+                    VtbError::config(
+                        "values",
+                        format!("({i}, {j}) = {v}"),
+                        format!("needs indices below {n} and a finite value"),
+                    ),
+                ));
+            }
+            a.add(i as usize, j as usize, v);
+        }
+        vtb::linalg::sparse::Ldlt::new(&a.finish_exact())
+            .map(Self)
+            .map_err(|e| to_py_err(py, e))
+    }
+
+    /// A⁻¹·B for an (n, m) array B, on two threads with the GIL released.
+    fn solve<'py>(
+        &self,
+        py: Python<'py>,
+        b: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let shape = b.shape().to_vec();
+        if shape[0] != self.0.n {
+            return Err(to_py_err(
+                py,
+                VtbError::config(
+                    "b",
+                    format!("{shape:?}"),
+                    format!("needs {} rows", self.0.n),
+                ),
+            ));
+        }
+        let mut x: Vec<f64> = b.as_array().iter().copied().collect();
+        py.detach(|| self.0.solve_columns(&mut x, shape[1], 2));
+        PyArray1::from_vec(py, x).reshape([shape[0], shape[1]])
+    }
 }
