@@ -9,9 +9,15 @@
 //!   h(s) = 1/(1 + αs + βs²),   α = −r₁/r₀,   β = α² − r₂/r₀,
 //!
 //! matches all three moments: the residual displacement is r₀·g with β·g̈ + α·ġ + g = F, a
-//! damped oscillator (α, β > 0, as the truncated modes are stable and lightly damped; about
-//! 6–7 kHz, damping ratio 0.06–0.1, on the converged preset), stepped exactly under the force
-//! linear over the step like the modes (`step`). A force held constant passes unchanged (g = F).
+//! damped oscillator (about 6–7 kHz, damping ratio 0.06–0.1, on the converged preset),
+//! stepped exactly under the force linear over the step like the modes (`step`). A force held
+//! constant passes unchanged (g = F).
+//!
+//! The filter must be passive (α, β > 0). Where the truncated modes are not well above the
+//! band, as at a low cut-off that leaves heavily damped rail-on-pad modes and overdamped ones
+//! out, or where a wheel's shape is ramped in at a rail end, the moments need not allow it: the
+//! filter is then the highest-order passive one of the ladder 1/(1 + αs + βs²), 1/(1 + αs)
+//! (α = −r₁/r₀ > 0, matching r₀ and r₁), 1 (the static residual).
 
 use crate::error::{Result, VtbError};
 
@@ -24,32 +30,49 @@ pub struct Filter {
 }
 
 impl Filter {
-    /// The filter of a load with residual moments r = (r₀, r₁, r₂): `None` when r₀ = 0 (a load
-    /// beyond the rail, or none), an error when the moments are not those of a passive
-    /// oscillator (`at` names the load in it).
+    /// The filter of a load with residual moments r = (r₀, r₁, r₂), the highest-order passive
+    /// one of the ladder (module documentation): `None` for the static residual (also when
+    /// r₀ = 0: a load beyond the rail, or none); β = 0 for the first-order filter. An error
+    /// when the moments are not finite or r₀ < 0 (`at` names the load in it): a residual
+    /// flexibility is never negative.
     pub fn from_moments(r: [f64; 3], at: impl FnOnce() -> String) -> Result<Option<Self>> {
-        if r[0] == 0.0 {
-            return Ok(None);
-        }
-        let alpha = -r[1] / r[0];
-        let beta = alpha * alpha - r[2] / r[0];
-        if !(r[0] > 0.0 && alpha > 0.0 && beta > 0.0 && alpha.is_finite() && beta.is_finite()) {
+        if !(r[0] >= 0.0 && r.iter().all(|x| x.is_finite())) {
             return Err(VtbError::Solver(format!(
-                "the rail residual under {} is not that of a passive oscillator (moments {:e}, \
-                 {:e}, {:e}; α = {alpha:e} s, β = {beta:e} s²): the reduction is not of a \
-                 stable damped structure, or its cut-off leaves modes too close to the band",
+                "the rail residual under {} has moments {:e}, {:e}, {:e}: not a residual \
+                 flexibility (the reduction is corrupt or not of a stable structure)",
                 at(),
                 r[0],
                 r[1],
                 r[2]
             )));
         }
-        Ok(Some(Self { alpha, beta }))
+        if r[0] == 0.0 {
+            return Ok(None);
+        }
+        let alpha = -r[1] / r[0];
+        let beta = alpha * alpha - r[2] / r[0];
+        Ok(if !(alpha > 0.0 && alpha.is_finite()) {
+            None
+        } else if beta > 0.0 && beta.is_finite() {
+            Some(Self { alpha, beta })
+        } else {
+            Some(Self { alpha, beta: 0.0 })
+        })
     }
 
     /// Its exact step over `dt`.
     pub fn step(&self, dt: f64) -> FilterStep {
         let (a, b) = (self.alpha, self.beta);
+        if b == 0.0 {
+            // α·ġ + g = F: the rest decays by e^{−h/α}, and ġ = Ḟ − (g − g_p)/α.
+            let e = (-dt / a).exp();
+            return FilterStep {
+                e: [[e, 0.0], [-e / a, 0.0]],
+                alpha: a,
+                dt,
+                pass: false,
+            };
+        }
         // x = (g, ġ), ẋ = A·x + (0, F/β), A = [[0, 1], [−1/β, −α/β]]: eigenvalues μ ± δ and
         // e^{Ah} = e^{μh}·(cosh(δh)·I + sinh(δh)/δ·(A − μI)) (Cayley–Hamilton).
         let mu = -a / (2.0 * b);
@@ -170,6 +193,43 @@ mod tests {
     }
 
     #[test]
+    fn the_first_order_step_matches_the_closed_form() {
+        // α·ġ + g = F with F linear from 7 to −5 over the step, g(0) = 3: by hand,
+        // g(t) = F(t) − αḞ + (g(0) − F(0) + αḞ)·e^{−t/α}.
+        let (alpha, dt) = (2e-5, 5e-5);
+        let step = Filter { alpha, beta: 0.0 }.step(dt);
+        let rate = -12.0 / dt;
+        let rest = (3.0 - 7.0 + alpha * rate) * (-dt / alpha).exp();
+        let want = [-5.0 - alpha * rate + rest, rate - rest / alpha];
+        let got = step.advance([3.0, 123.0], 7.0, -5.0);
+        for j in 0..2 {
+            assert!(
+                (got[j] - want[j]).abs() < 1e-12 * want[j].abs().max(1.0),
+                "{got:?} {want:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_ladder_keeps_the_highest_passive_order() {
+        let f = |r| Filter::from_moments(r, String::new).unwrap();
+        // The preset's range: second order.
+        assert_eq!(
+            f([1e-10, -4.2e-16, -5.2e-20]).map(|f| f.beta > 0.0),
+            Some(true)
+        );
+        // r₂ too large for a positive β: first order.
+        let first = f([1e-10, -4.2e-16, 1e-20]).unwrap();
+        assert!(
+            first.beta == 0.0 && (first.alpha - 4.2e-6).abs() < 1e-18,
+            "{first:?}"
+        );
+        // r₁ ≥ 0: the static residual.
+        assert_eq!(f([1e-10, 4e-16, -5e-20]), None);
+        assert_eq!(f([0.0; 3]), None);
+    }
+
+    #[test]
     fn a_steady_force_passes_and_the_step_gain_is_positive() {
         let f = Filter {
             alpha: 4.2e-6,
@@ -189,13 +249,10 @@ mod tests {
     }
 
     #[test]
-    fn moments_of_an_active_structure_are_refused() {
-        assert_eq!(
-            Filter::from_moments([0.0, 0.0, 0.0], String::new).unwrap(),
-            None
-        );
-        let e = Filter::from_moments([1e-10, 4e-16, -5e-20], || "wheel 1 at x = 3 m".into())
-            .unwrap_err();
-        assert!(e.to_string().contains("wheel 1 at x = 3 m"), "{e}");
+    fn moments_that_are_no_residual_are_refused() {
+        for r in [[-1e-10, 0.0, 0.0], [1e-10, f64::NAN, 0.0]] {
+            let e = Filter::from_moments(r, || "wheel 1 at x = 3 m".into()).unwrap_err();
+            assert!(e.to_string().contains("wheel 1 at x = 3 m"), "{e}");
+        }
     }
 }
