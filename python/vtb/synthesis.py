@@ -185,11 +185,11 @@ def build(config: Config, progress=None) -> Reduction:
     except _EigshFailed:
         raise SolverError("synthesis: the undamped eigensolver failed") from None
     kc = k.tocoo()  # K is symmetric positive definite: the core's LDLᵀ, solving 8 columns per pass
-    lu = _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
+    solver = _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
     # Attachment vectors of the dashpots, less what the modes already hold (static part).
     b = _attachments(system, cfg)
     if b.shape[1]:
-        x = lu.solve(b)
+        x = solver.solve(b)
         x -= phi @ ((phi.T @ b) / w2[:, None])
         x -= phi @ (phi.T @ (m @ x))
         q, r = np.linalg.qr(x)
@@ -218,12 +218,12 @@ def build(config: Config, progress=None) -> Reduction:
     note("rail residual")
     rail = system.layers[0][2]
     band = max(1, int(math.ceil(RESIDUAL_REACH * rail / system.length)))
-    residual = _rail_residual(lu, c, m, psi, lam, weight, rail, band, system.n)
+    residual = _rail_residual(solver, c, m, psi, lam, weight, rail, band, system.n)
     return Reduction(cache_key(config), cutoff, lam, psi, weight, rail, band, residual,
                      time.perf_counter() - t0, int(phi.shape[1]), int(basis.shape[1] - phi.shape[1]))
 
 
-def _rail_residual(lu, c, m, psi, lam, weight, rail: int, band: int, n: int, chunk: int = 512) -> np.ndarray:
+def _rail_residual(solver, c, m, psi, lam, weight, rail: int, band: int, n: int, chunk: int = 512) -> np.ndarray:
     """R_k[i, d] = (F_k − G_k)[i, i + d] for rail DOFs i, 0 ≤ d ≤ band (zero past the rail), k =
     0, 1, 2: the moments F₀ = K⁻¹, F₁ = −K⁻¹CK⁻¹, F₂ = K⁻¹CK⁻¹CK⁻¹ − K⁻¹MK⁻¹ of the full model
     less the kept modes' G_k = −Σ w·Re(ψψᵀ/λ^(k+1))."""
@@ -232,9 +232,9 @@ def _rail_residual(lu, c, m, psi, lam, weight, rail: int, band: int, n: int, chu
         b = min(rail, a + chunk)
         e = np.zeros((n, b - a))
         e[np.arange(a, b), np.arange(b - a)] = 1.0
-        x0 = lu.solve(e)
-        x1 = lu.solve(c @ x0)
-        moments = (x0, -x1, lu.solve(c @ x1 - m @ x0))
+        x0 = solver.solve(e)
+        x1 = solver.solve(c @ x0)
+        moments = (x0, -x1, solver.solve(c @ x1 - m @ x0))
         hi = min(rail, b + band)
         for k, x in enumerate(moments):
             scaled = psi[a:b] * (weight / lam ** (k + 1))[None, :]

@@ -215,10 +215,9 @@ struct Run<'a, const W: usize> {
     rail_acc: Vec<Acc<W>>,
     rail_free: Vec<[f64; W]>,
     element_flex: Vec<f64>,
-    /// The wheels' residual filters this step, each lane's filter states (g, ġ) `[lane·nw +
-    /// wheel]` at the step's start, their values at its end under no new force (`g_free`) and
-    /// per unit new force (`g_gain`, shared), and the filtered forces g at its end (`g_now`).
-    filters: Vec<FilterStep>,
+    /// The wheels' residual filters: each lane's states (g, ġ) `[lane·nw + wheel]` at the
+    /// step's start, their values at its end under no new force (`g_free`) and per unit new
+    /// force (`g_gain`, shared), and the filtered forces g at its end (`g_now`).
     /// sᵀR₀s of each wheel this step.
     self_res: Vec<f64>,
     g_state: Vec<[f64; 2]>,
@@ -504,7 +503,6 @@ impl<'a, const W: usize> Run<'a, W> {
             rail_acc: vec![Acc::ZERO; nw],
             rail_free: vec![[0.0; W]; nw],
             element_flex: vec![0.0; nw],
-            filters: vec![FilterStep::pass(dt); nw],
             self_res: vec![0.0; nw],
             g_state: vec![[0.0; 2]; W * nw],
             g_free: vec![[0.0; 2]; W * nw],
@@ -766,7 +764,7 @@ impl<'a, const W: usize> Run<'a, W> {
                     w % wpc + 1
                 )
             });
-            self.filters[w] = match filter {
+            let step = match filter {
                 Ok(Some(f)) => f.step(dt),
                 Ok(None) => FilterStep::pass(dt),
                 Err(e) => {
@@ -774,15 +772,15 @@ impl<'a, const W: usize> Run<'a, W> {
                     FilterStep::pass(dt)
                 }
             };
-            self.g_gain[w] = self.filters[w].advance([0.0; 2], 0.0, 1.0);
+            self.g_gain[w] = step.advance([0.0; 2], 0.0, 1.0);
             for c in 0..W {
                 let i = c * nw + w;
-                self.g_free[i] = self.filters[w].advance(self.g_state[i], self.p[i], 0.0);
+                self.g_free[i] = step.advance(self.g_state[i], self.p[i], 0.0);
             }
             self.diag[w] = self.diag_acc[w].sum()[0] + moments[0] * self.g_gain[w][0];
             self.rail_free[w] = self.rail_acc[w].sum();
             self.element_flex[w] = if cfg.discretisation.element_flexibility {
-                st.wheel_flexibility(self.wheel_x0[w] + cfg.speed * t1, self.patch[w])
+                st.wheel_flexibility(x, self.patch[w])
             } else {
                 0.0
             };
