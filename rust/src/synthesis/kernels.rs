@@ -104,32 +104,68 @@ fn axpy(y: &mut [f64], x: &[f64], s: f64) {
     }
 }
 
-/// out[b0..b1] = Σ_k s_k·ψ(start + k)[b0..b1] (re, im).
+/// y = Σ_k s_k·x_k (`ADD`: y += …) for N vectors in one pass over y.
+#[inline(always)]
+fn combine<const N: usize, const ADD: bool>(y: &mut [f64], x: [&[f64]; N], s: [f64; N]) {
+    let n = y.len();
+    let x = x.map(|x| &x[..n]);
+    for (j, y) in y.iter_mut().enumerate() {
+        let mut a = if ADD { *y } else { 0.0 };
+        for k in 0..N {
+            a = x[k][j].mul_add(s[k], a);
+        }
+        *y = a;
+    }
+}
+
+/// y (+)= Σ_k s_k·x_k for up to four vectors (`combine` by count).
+#[inline(always)]
+fn combine_up_to_4<const ADD: bool>(y: &mut [f64], x: &[&[f64]], s: &[f64]) {
+    match x.len() {
+        1 => combine::<1, ADD>(y, [x[0]], [s[0]]),
+        2 => combine::<2, ADD>(y, [x[0], x[1]], [s[0], s[1]]),
+        3 => combine::<3, ADD>(y, [x[0], x[1], x[2]], [s[0], s[1], s[2]]),
+        _ => combine::<4, ADD>(y, [x[0], x[1], x[2], x[3]], [s[0], s[1], s[2], s[3]]),
+    }
+}
+
+/// out[b0..b1] = Σ_k s_k·ψ(start + k)[b0..b1] (re, im): the nonzero rows four at a time, so
+/// the output is written once per four rows (the pass is bound by these loads and stores).
 #[inline(always)]
 fn project_block(red: &Reduction, s: &Shape, b0: usize, b1: usize, or: &mut [f64], oi: &mut [f64]) {
+    let mut rows = s
+        .values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(k, &v)| (red.row(s.start + k), v));
     let mut first = true;
-    for (k, &v) in s.values.iter().enumerate() {
-        if v == 0.0 {
-            continue;
+    loop {
+        let (mut re, mut im, mut v) = ([&[][..]; 4], [&[][..]; 4], [0.0; 4]);
+        let mut k = 0;
+        for ((rr, ri), x) in rows.by_ref().take(4) {
+            (re[k], im[k], v[k]) = (&rr[b0..b1], &ri[b0..b1], x);
+            k += 1;
         }
-        let (rr, ri) = red.row(s.start + k);
-        let (rr, ri) = (&rr[b0..b1], &ri[b0..b1]);
-        if first {
-            for (o, x) in or.iter_mut().zip(rr) {
-                *o = v * x;
+        match (k, first) {
+            (0, true) => {
+                or.fill(0.0);
+                oi.fill(0.0);
             }
-            for (o, x) in oi.iter_mut().zip(ri) {
-                *o = v * x;
+            (0, false) => {}
+            (_, true) => {
+                combine_up_to_4::<false>(or, &re[..k], &v[..k]);
+                combine_up_to_4::<false>(oi, &im[..k], &v[..k]);
             }
-            first = false;
-        } else {
-            axpy(or, rr, v);
-            axpy(oi, ri, v);
+            (_, false) => {
+                combine_up_to_4::<true>(or, &re[..k], &v[..k]);
+                combine_up_to_4::<true>(oi, &im[..k], &v[..k]);
+            }
         }
-    }
-    if first {
-        or.fill(0.0);
-        oi.fill(0.0);
+        if k < 4 {
+            break;
+        }
+        first = false;
     }
 }
 
@@ -150,50 +186,78 @@ pub(super) fn project(red: &Reduction, s: &Shape, out: &mut CVec) {
     })
 }
 
+/// The modes' step compliance between rail DOFs, D(k, k + d) = Re Σ a1·ψ_k·ψ_{k+d} for
+/// d < `span` (the longest wheel shape). A wheel's own step compliance Re Σ a1·(ψᵀs)² = sᵀDs
+/// is then a sum over its few DOFs, not a pass over the modes every step; the table depends
+/// on the step only, so the runs of a study share it (`Reduction::rail_step_compliance`).
+#[derive(Debug)]
+pub(super) struct RailStepCompliance {
+    pub span: usize,
+    table: Vec<f64>,
+}
+
+impl RailStepCompliance {
+    pub fn new(red: &Reduction, coef: &Coefficients, span: usize) -> Self {
+        let mut table = vec![0.0; red.rail_dofs * span];
+        let mut scaled = CVec::zeros(red.stride);
+        let (a1r, a1i) = (&coef.a1[0], &coef.a1[1]);
+        for (k, row) in table.chunks_exact_mut(span).enumerate() {
+            let (rr, ri) = red.row(k);
+            for j in 0..rr.len() {
+                scaled.re[j] = a1r[j] * rr[j] - a1i[j] * ri[j];
+                scaled.im[j] = a1r[j] * ri[j] + a1i[j] * rr[j];
+            }
+            for (d, l) in (k..(k + span).min(red.rail_dofs)).enumerate() {
+                let (xr, xi) = red.row(l);
+                row[d] = dot(&scaled.re, &scaled.im, xr, xi);
+            }
+        }
+        Self { span, table }
+    }
+
+    /// sᵀDs for a rail shape of at most `span` values.
+    pub fn quadratic(&self, s: &Shape) -> f64 {
+        debug_assert!(
+            s.values.len() <= self.span,
+            "a wheel shape longer than the span"
+        );
+        let mut out = 0.0;
+        for (i, a) in s.values.iter().enumerate() {
+            let row = &self.table[(s.start + i) * self.span..];
+            out += a * a * row[0];
+            for (d, b) in s.values[i + 1..].iter().enumerate() {
+                out += 2.0 * a * b * row[d + 1];
+            }
+        }
+        out
+    }
+}
+
 /// What the wheel pass reads and writes: for each wheel of shape `shapes[w]`, `outs[w]` =
-/// ψᵀs, its step compliance Re Σ a1·(ψᵀs)² into `diag[w]` and, per lane, the free rail
-/// displacement under it Re Σ (ψᵀs)·Q̃ into `rail[w]`.
+/// ψᵀs and, per lane, the free rail displacement under it Re Σ (ψᵀs)·Q̃ into `rail[w]`.
 pub(super) struct WheelPass<'a, const W: usize> {
     pub shapes: &'a [Shape],
     /// Wheels on the structure; the others (a zero shape) are skipped, their `outs` already
     /// zero.
     pub active: &'a [bool],
     pub outs: &'a mut [CVec],
-    pub diag: &'a mut [Acc<1>],
     pub rail: &'a mut [Acc<W>],
 }
 
 /// The wheel pass (see `WheelPass`), all wheels and lanes one block at a time.
-pub(super) fn wheel_pass<const W: usize>(
-    red: &Reduction,
-    coef: &Coefficients,
-    q_free: &[CVec; W],
-    p: WheelPass<'_, W>,
-) {
-    crate::wide!(<W> (red: &Reduction = red, coef: &Coefficients = coef, qf: &[CVec; W] = q_free, p: WheelPass<'_, W> = p) {
-        let WheelPass { shapes, active, outs, diag, rail } = p;
+pub(super) fn wheel_pass<const W: usize>(red: &Reduction, q_free: &[CVec; W], p: WheelPass<'_, W>) {
+    crate::wide!(<W> (red: &Reduction = red, qf: &[CVec; W] = q_free, p: WheelPass<'_, W> = p) {
+        let WheelPass { shapes, active, outs, rail } = p;
         let n = red.stride;
-        diag.fill(Acc::ZERO);
         rail.fill(Acc::ZERO);
         let mut b0 = 0;
         while b0 < n {
             let b1 = (b0 + BLOCK).min(n);
-            let (a1r, a1i) = (&coef.a1[0][b0..b1], &coef.a1[1][b0..b1]);
-            for ((((s, out), d), r), _) in shapes.iter().zip(outs.iter_mut()).zip(diag.iter_mut()).zip(rail.iter_mut())
+            for (((s, out), r), _) in shapes.iter().zip(outs.iter_mut()).zip(rail.iter_mut())
                 .zip(active).filter(|(_, on)| **on)
             {
                 let (or, oi) = (&mut out.re[b0..b1], &mut out.im[b0..b1]);
                 project_block(red, s, b0, b1, or, oi);
-                let chunks = or.chunks_exact(P).zip(oi.chunks_exact(P)).zip(a1r.chunks_exact(P).zip(a1i.chunks_exact(P)));
-                let mut acc = d.0[0];
-                for ((or, oi), (a1r, a1i)) in chunks {
-                    for q in 0..P {
-                        let tr = a1r[q] * or[q] - a1i[q] * oi[q];
-                        let ti = a1r[q] * oi[q] + a1i[q] * or[q];
-                        acc[q] = tr.mul_add(or[q], (-ti).mul_add(oi[q], acc[q]));
-                    }
-                }
-                d.0[0] = acc;
                 for (acc, q) in r.0.iter_mut().zip(qf) {
                     cdot(acc, or, oi, &q.re[b0..b1], &q.im[b0..b1]);
                 }
@@ -365,4 +429,97 @@ pub(super) fn update<const W: usize>(
             b0 = b1;
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reduction of `m` arbitrary stable modes on `n` DOFs, all rail, from a fixed sequence.
+    fn reduction(m: usize, n: usize) -> Reduction {
+        let mut seed = 0x9e37_79b9_u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let lam_re = (0..m).map(|_| -1.0 - next().abs()).collect();
+        let lam_im = (0..m).map(|j| 100.0 * (j + 1) as f64).collect();
+        let psi_re = (0..n * m).map(|_| next()).collect();
+        let psi_im = (0..n * m).map(|_| next()).collect();
+        Reduction::new(
+            n,
+            lam_re,
+            lam_im,
+            vec![2.0; m],
+            psi_re,
+            psi_im,
+            n,
+            0,
+            vec![0.0; 3 * n],
+        )
+        .expect("a valid reduction")
+    }
+
+    /// ψᵀs by the definition, one mode at a time.
+    fn naive_projection(red: &Reduction, s: &Shape) -> CVec {
+        let mut out = CVec::zeros(red.stride);
+        for (k, v) in s.values.iter().enumerate() {
+            let (rr, ri) = red.row(s.start + k);
+            for j in 0..red.stride {
+                out.re[j] += v * rr[j];
+                out.im[j] += v * ri[j];
+            }
+        }
+        out
+    }
+
+    /// The projection (rows four at a time, zeros skipped) against the definition, for shapes
+    /// of 1 to 9 values with zeros among them.
+    #[test]
+    fn projection_matches_its_definition() {
+        let red = reduction(21, 16);
+        for len in 1..=9 {
+            let values = (0..len)
+                .map(|k| if k % 3 == 1 { 0.0 } else { 0.3 + k as f64 })
+                .collect();
+            let s = Shape { start: 5, values };
+            let mut got = CVec::zeros(red.stride);
+            project(&red, &s, &mut got);
+            let want = naive_projection(&red, &s);
+            for j in 0..red.stride {
+                assert!((got.re[j] - want.re[j]).abs() <= 1e-13 * (1.0 + want.re[j].abs()));
+                assert!((got.im[j] - want.im[j]).abs() <= 1e-13 * (1.0 + want.im[j].abs()));
+            }
+        }
+    }
+
+    /// The table's sᵀDs against Re Σ a1·(ψᵀs)² over the modes, at every start of the rail
+    /// (the last rows, whose band runs off the rail, included).
+    #[test]
+    fn the_step_compliance_table_matches_the_modal_sum() {
+        let red = reduction(13, 12);
+        let coef = Coefficients::new(&red, 5e-5);
+        let span = 4;
+        let table = RailStepCompliance::new(&red, &coef, span);
+        for start in 0..red.rail_dofs {
+            let len = span.min(red.rail_dofs - start);
+            let values = (0..len).map(|k| 1.0 - 0.4 * k as f64).collect();
+            let s = Shape { start, values };
+            let p = naive_projection(&red, &s);
+            let want: f64 = (0..red.stride)
+                .map(|j| {
+                    let (ar, ai) = (coef.a1[0][j], coef.a1[1][j]);
+                    let (tr, ti) = (ar * p.re[j] - ai * p.im[j], ar * p.im[j] + ai * p.re[j]);
+                    tr * p.re[j] - ti * p.im[j]
+                })
+                .sum();
+            let got = table.quadratic(&s);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs().max(1e-30),
+                "start {start}: {got} vs {want}"
+            );
+        }
+    }
 }

@@ -31,9 +31,10 @@ pub use run::{run, run_lanes};
 
 use crate::basis::Shape;
 use crate::error::{Result, VtbError};
-use kernels::CVec;
+use kernels::{CVec, RailStepCompliance};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+use step::Coefficients;
 
 /// Mode arrays are padded with inert modes (ψ = 0, λ = 0, w = 0) to a multiple of this, the
 /// partial sums of every dot product over the modes.
@@ -59,6 +60,8 @@ pub struct Reduction {
     residual: Vec<f64>,
     /// Each observer's force-feedthrough gains over the rail's DOFs (`gains`), by shape.
     gains: Arc<Mutex<HashMap<ShapeKey, Arc<Gains>>>>,
+    /// The rail's step-compliance tables (`rail_step_compliance`), by step (bits) and span.
+    step_tables: Arc<Mutex<HashMap<(u64, usize), Arc<RailStepCompliance>>>>,
 }
 
 /// A shape vector as a key (its start and the bits of its values).
@@ -162,6 +165,7 @@ impl Reduction {
             band,
             residual,
             gains: Arc::default(),
+            step_tables: Arc::default(),
         })
     }
 
@@ -176,6 +180,21 @@ impl Reduction {
     /// Memory held (bytes).
     pub fn bytes(&self) -> usize {
         8 * (self.lam_re.len() * 3 + self.psi_re.len() * 2 + self.residual.len())
+    }
+
+    /// The rail's step-compliance table for the step of `coef` (h) and shapes of up to `span`
+    /// values: computed by the first run that needs it, then shared.
+    fn rail_step_compliance(
+        &self,
+        coef: &Coefficients,
+        h: f64,
+        span: usize,
+    ) -> Arc<RailStepCompliance> {
+        let mut tables = self.step_tables.lock().unwrap_or_else(|e| e.into_inner());
+        tables
+            .entry((h.to_bits(), span))
+            .or_insert_with(|| Arc::new(RailStepCompliance::new(self, coef, span)))
+            .clone()
     }
 
     /// ψ at DOF i (re, im), padded.

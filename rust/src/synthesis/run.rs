@@ -22,7 +22,7 @@
 //! force times a gain (`Gains` over the rail's DOFs for the wheels, constants for the
 //! dampers); `records` assembles them with the rail residual's acceleration.
 
-use super::kernels::{self, Acc, CVec, Scratch, Update, WheelPass};
+use super::kernels::{self, Acc, CVec, RailStepCompliance, Scratch, Update, WheelPass};
 use super::residual::{Filter, FilterStep};
 use super::step::{C, Coefficients};
 use super::{Gains, Reduction};
@@ -210,8 +210,10 @@ struct Run<'a, const W: usize> {
     /// Each lane's free modal state Q̃ for the coming step.
     q_free: [CVec; W],
     // Per-step values and scratch (allocated once).
+    /// Each wheel's step compliance this step (modes and residual); the modes' share from
+    /// the rail DOFs' table.
     diag: Vec<f64>,
-    diag_acc: Vec<Acc<1>>,
+    rail_step: Arc<RailStepCompliance>,
     rail_acc: Vec<Acc<W>>,
     rail_free: Vec<[f64; W]>,
     element_flex: Vec<f64>,
@@ -341,6 +343,11 @@ impl<'a, const W: usize> Run<'a, W> {
                 values: Vec::with_capacity(st.wheel_shape_len(patch[w])),
             })
             .collect();
+        let span = patch
+            .iter()
+            .map(|&a| st.wheel_shape_len(a))
+            .max()
+            .unwrap_or(1);
 
         // Dampers: ports, step compliance with the rail near them, and G_dd = Re Σ a1·ψ_d·ψ_e
         // + R(upper_d, upper_e), the same in every lane.
@@ -499,7 +506,7 @@ impl<'a, const W: usize> Run<'a, W> {
             mover_psi: CVec::zeros(n),
             q_free: std::array::from_fn(|_| CVec::zeros(n)),
             diag: vec![0.0; nw],
-            diag_acc: vec![Acc::ZERO; nw],
+            rail_step: red.rail_step_compliance(&coef, dt, span),
             rail_acc: vec![Acc::ZERO; nw],
             rail_free: vec![[0.0; W]; nw],
             element_flex: vec![0.0; nw],
@@ -736,13 +743,11 @@ impl<'a, const W: usize> Run<'a, W> {
         let nw = self.nw();
         kernels::wheel_pass::<W>(
             red,
-            &self.coef,
             &self.q_free,
             WheelPass {
                 shapes: &self.wheel_shapes,
                 active: &self.active,
                 outs: &mut self.ports[..nw],
-                diag: &mut self.diag_acc,
                 rail: &mut self.rail_acc,
             },
         );
@@ -751,10 +756,10 @@ impl<'a, const W: usize> Run<'a, W> {
         for w in 0..nw {
             let s = &self.wheel_shapes[w];
             let x = self.wheel_x0[w] + cfg.speed * t1;
-            let moments = if self.active[w] {
-                red.residual_moments(s)
+            let (modal, moments) = if self.active[w] {
+                (self.rail_step.quadratic(s), red.residual_moments(s))
             } else {
-                [0.0; 3]
+                (0.0, [0.0; 3])
             };
             self.self_res[w] = moments[0];
             let filter = Filter::from_moments(moments, || {
@@ -777,7 +782,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 let i = c * nw + w;
                 self.g_free[i] = step.advance(self.g_state[i], self.p[i], 0.0);
             }
-            self.diag[w] = self.diag_acc[w].sum()[0] + moments[0] * self.g_gain[w][0];
+            self.diag[w] = modal + moments[0] * self.g_gain[w][0];
             self.rail_free[w] = self.rail_acc[w].sum();
             self.element_flex[w] = if cfg.discretisation.element_flexibility {
                 st.wheel_flexibility(x, self.patch[w])
