@@ -61,8 +61,11 @@ pub struct Reduction {
     /// Each observer's force-feedthrough gains over the rail's DOFs (`gains`), by shape.
     gains: Arc<Mutex<HashMap<ShapeKey, Arc<Gains>>>>,
     /// The rail's step-compliance tables (`rail_step_compliance`), by step (bits) and span.
-    step_tables: Arc<Mutex<HashMap<(u64, usize), Arc<RailStepCompliance>>>>,
+    step_tables: Arc<Mutex<StepTables>>,
 }
+
+/// The rail's step-compliance tables by (step bits, span).
+type StepTables = HashMap<(u64, usize), Arc<RailStepCompliance>>;
 
 /// A shape vector as a key (its start and the bits of its values).
 type ShapeKey = (usize, Vec<u64>);
