@@ -86,24 +86,6 @@ fn cdot(acc: &mut [f64; P], ar: &[f64], ai: &[f64], xr: &[f64], xi: &[f64]) {
     *acc = s;
 }
 
-/// y += Σ_k s_k·x_k for four vectors (one pass over y).
-#[inline(always)]
-fn axpy4(y: &mut [f64], x: [&[f64]; 4], s: [f64; 4]) {
-    let n = y.len();
-    let (x0, x1, x2, x3) = (&x[0][..n], &x[1][..n], &x[2][..n], &x[3][..n]);
-    for ((y, (a, b)), (c, d)) in y.iter_mut().zip(x0.iter().zip(x1)).zip(x2.iter().zip(x3)) {
-        *y = a.mul_add(s[0], b.mul_add(s[1], c.mul_add(s[2], d.mul_add(s[3], *y))));
-    }
-}
-
-/// y += s·x.
-#[inline(always)]
-fn axpy(y: &mut [f64], x: &[f64], s: f64) {
-    for (y, x) in y.iter_mut().zip(x) {
-        *y = x.mul_add(s, *y);
-    }
-}
-
 /// y = Σ_k s_k·x_k (`ADD`: y += …) for N vectors in one pass over y.
 #[inline(always)]
 fn combine<const N: usize, const ADD: bool>(y: &mut [f64], x: [&[f64]; N], s: [f64; N]) {
@@ -352,21 +334,17 @@ pub(super) fn update<const W: usize>(
                 dgr.fill(0.0);
                 dgi.fill(0.0);
                 // Four active ports at a time: one pass over the block's Δg per four.
-                let mut four: [(&[f64], &[f64], f64); 4] = [(&[], &[], 0.0); 4];
+                let (mut re, mut im, mut s) = ([&[][..]; 4], [&[][..]; 4], [0.0; 4]);
                 let mut k = 0;
-                for ((v, f), _) in ports.iter().zip(forces).zip(active).filter(|(_, on)| **on) {
-                    four[k] = (&v.re[b0..b1], &v.im[b0..b1], f[c]);
+                let mut on = ports.iter().zip(forces).zip(active).filter(|(_, on)| **on).peekable();
+                while let Some(((v, f), _)) = on.next() {
+                    (re[k], im[k], s[k]) = (&v.re[b0..b1], &v.im[b0..b1], f[c]);
                     k += 1;
-                    if k == 4 {
-                        let s = four.map(|(_, _, f)| f);
-                        axpy4(dgr, four.map(|(re, _, _)| re), s);
-                        axpy4(dgi, four.map(|(_, im, _)| im), s);
+                    if k == 4 || on.peek().is_none() {
+                        combine_up_to_4::<true>(dgr, &re[..k], &s[..k]);
+                        combine_up_to_4::<true>(dgi, &im[..k], &s[..k]);
                         k = 0;
                     }
-                }
-                for &(re, im, f) in &four[..k] {
-                    axpy(dgr, re, f);
-                    axpy(dgi, im, f);
                 }
                 let (qfr, qfi) = (&mut qf[c].re[b0..b1], &mut qf[c].im[b0..b1]);
                 let (qr, qi) = (&mut sc.q.re[..nb], &mut sc.q.im[..nb]);
