@@ -175,6 +175,16 @@ def test_bad_input_names_the_field():
         vtb._core.Reduction(1, np.array([-1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
 
 
+def test_a_reduction_beyond_the_memory_budget_is_refused():
+    c = one_span()
+    need = 2 * synthesis.reduction(c).nbytes
+    c.solver.memory_budget = 0.5 * need
+    with pytest.raises(vtb.ConfigError, match="solver.memory_budget"):
+        vtb.simulate(c)
+    c.solver.memory_budget = 2.0 * need
+    assert vtb.simulate(c).metrics()["rail_acc_max"] > 0.0
+
+
 def test_the_setup_solver_solves_and_refuses_bad_input():
     """The core's sparse LDLᵀ that builds the residual (vtb._core.SpdSolver) against a dense
     solve, and its errors."""

@@ -289,10 +289,12 @@ def reduction(config: Config, progress: bool = False) -> Reduction:
     """The reduction of ``config``'s structure at its ``discretisation.synthesis_cutoff``:
     from this process's memory, else from the disk cache (:func:`cache_dir`), else built
     (:func:`build`) and cached. A cached file that is stale or corrupt is refused (with a
-    warning naming why) and rebuilt. Its core copy is made once."""
+    warning naming why) and rebuilt. Its core copy is made once. Refused with a
+    :class:`~vtb.ConfigError` naming ``solver.memory_budget`` when the reduction (its arrays and
+    the core's copy) exceeds the configuration's budget."""
     key = cache_key(config)
     if key in _MEMORY:
-        return _MEMORY[key]
+        return _within_budget(_MEMORY[key], config)
     path = _path(key)
     red, why = _load(path, key)
     if red is None:
@@ -308,8 +310,19 @@ def reduction(config: Config, progress: bool = False) -> Reduction:
             import warnings
 
             warnings.warn(f"could not cache the reduction at {path} ({e})", stacklevel=2)
+    _within_budget(red, config)
     red.to_core()
     _MEMORY[key] = red
+    return red
+
+
+def _within_budget(red: Reduction, config: Config) -> Reduction:
+    """``red``, or a ConfigError when it and its core copy exceed ``solver.memory_budget``."""
+    need = 2 * red.nbytes
+    if need > config.solver.memory_budget:
+        raise config_error("solver.memory_budget", config.solver.memory_budget,
+                           f"the synthesis reduction of this structure holds {need / 1e9:.3g} GB ({red.n_modes} modes' "
+                           f"arrays and the core's copy); raise the budget or lower discretisation.synthesis_cutoff")
     return red
 
 
