@@ -39,10 +39,16 @@ impl CVec {
         }
     }
 
-    /// self = c ⊙ o for per-mode complex constants c.
-    pub fn set_mul(&mut self, c: [&[f64]; 2], o: &CVec) {
+    /// The (re, im) parts, as `set_mul` takes them.
+    pub fn parts(&self) -> [&[f64]; 2] {
+        [&self.re, &self.im]
+    }
+
+    /// self = c ⊙ o for per-mode complex constants c and a complex vector o given by its
+    /// (re, im) parts (a `CVec`'s or a row of ψ).
+    pub fn set_mul(&mut self, c: [&[f64]; 2], o: [&[f64]; 2]) {
         for j in 0..self.re.len() {
-            let (a, b) = (o.re[j], o.im[j]);
+            let (a, b) = (o[0][j], o[1][j]);
             self.re[j] = c[0][j] * a - c[1][j] * b;
             self.im[j] = c[0][j] * b + c[1][j] * a;
         }
@@ -174,7 +180,7 @@ pub(super) fn project(red: &Reduction, s: &Shape, out: &mut CVec) {
 /// on the step only, so the runs of a study share it (`Reduction::rail_step_compliance`).
 #[derive(Debug)]
 pub(super) struct RailStepCompliance {
-    pub span: usize,
+    span: usize,
     table: Vec<f64>,
 }
 
@@ -182,13 +188,9 @@ impl RailStepCompliance {
     pub fn new(red: &Reduction, coef: &Coefficients, span: usize) -> Self {
         let mut table = vec![0.0; red.rail_dofs * span];
         let mut scaled = CVec::zeros(red.stride);
-        let (a1r, a1i) = (&coef.a1[0], &coef.a1[1]);
         for (k, row) in table.chunks_exact_mut(span).enumerate() {
             let (rr, ri) = red.row(k);
-            for j in 0..rr.len() {
-                scaled.re[j] = a1r[j] * rr[j] - a1i[j] * ri[j];
-                scaled.im[j] = a1r[j] * ri[j] + a1i[j] * rr[j];
-            }
+            scaled.set_mul([&coef.a1[0], &coef.a1[1]], [rr, ri]);
             for (d, l) in (k..(k + span).min(red.rail_dofs)).enumerate() {
                 let (xr, xi) = red.row(l);
                 row[d] = dot(&scaled.re, &scaled.im, xr, xi);

@@ -218,8 +218,8 @@ impl Reduction {
             .filter(|(s, _)| !cache.contains_key(&key(s)))
             .map(|(s, psi)| {
                 let (mut pw, mut lw) = (CVec::zeros(self.stride), CVec::zeros(self.stride));
-                pw.set_mul([&self.weight, &zeros], psi);
-                lw.set_mul([&self.lam_re, &self.lam_im], &pw);
+                pw.set_mul([&self.weight, &zeros], psi.parts());
+                lw.set_mul([&self.lam_re, &self.lam_im], pw.parts());
                 (key(s), lw, pw)
             })
             .collect();

@@ -156,7 +156,7 @@ fn dot(x: &CVec, y: &CVec) -> f64 {
 /// Re Σ c·x·y over the modes, c per-mode complex constants.
 fn scaled_dot(c: [&[f64]; 2], x: &CVec, y: &CVec) -> f64 {
     let mut t = CVec::zeros(x.re.len());
-    t.set_mul(c, x);
+    t.set_mul(c, x.parts());
     dot(&t, y)
 }
 
@@ -368,7 +368,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 psi.im[j] -= low.im[j];
             }
             let mut scaled = CVec::zeros(n);
-            scaled.set_mul(a1, &psi);
+            scaled.set_mul(a1, psi.parts());
             let (lo, hi) = reach(red, &st.shape(0, x));
             let gain = (lo..hi)
                 .map(|i| {
@@ -405,13 +405,13 @@ impl<'a, const W: usize> Run<'a, W> {
         let mut observers = Vec::with_capacity(shapes.len());
         for (((li, s), psi), gains) in shapes.into_iter().zip(psis).zip(gains) {
             let mut pw = CVec::zeros(n);
-            pw.set_mul(weight, &psi);
+            pw.set_mul(weight, psi.parts());
             let mut plw = CVec::zeros(n);
-            plw.set_mul(lam, &pw);
+            plw.set_mul(lam, pw.parts());
             let mut l2 = CVec::zeros(n);
-            l2.set_mul(lam, &psi);
+            l2.set_mul(lam, psi.parts());
             let l2_copy = l2.clone();
-            l2.set_mul(lam, &l2_copy);
+            l2.set_mul(lam, l2_copy.parts());
             observers.push(Observer {
                 damper_gains: ports[nw..]
                     .iter()
@@ -799,7 +799,7 @@ impl<'a, const W: usize> Run<'a, W> {
                 (self.near_pairs[wi * nw + vi], self.near_res[wi * nw + vi]) =
                     if self.active[wi] && self.active[vi] && near(red, a, b) {
                         if !scaled {
-                            self.scaled_port.set_mul(a1, &self.ports[wi]);
+                            self.scaled_port.set_mul(a1, self.ports[wi].parts());
                             scaled = true;
                         }
                         (dot(&self.scaled_port, &self.ports[vi]), red.residual(a, b))
