@@ -1,6 +1,7 @@
 """vtb.optimize on a short case, and the calibrated article preset."""
 
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,6 +9,8 @@ import pytest
 import vtb
 from vtb import moga, scaleout
 from vtb.presets import ARTICLE_RAIL_ACC
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -311,19 +314,44 @@ def test_reproduction_records_hypervolume_against_evaluations(short, swept, tmp_
         reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), optimiser="lukewarm")
 
 
+def _optimiser_choice_bench():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("optimiser_choice", ROOT / "benches" / "optimiser_choice.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return bench
+
+
+def test_the_optimiser_rule_decides_before_the_last_runs_only_when_they_cannot_change_it():
+    """The bench's rule: the higher median final hypervolume over 5 seeds, a tie (0.5 %) broken
+    by the fewer median evaluations; with runs missing, a verdict only when every result of the
+    missing runs gives the same one."""
+    bench = _optimiser_choice_bench()
+
+    def runs(start, hvs, evals=10_000):
+        return [dict(start=start, seed=i, hypervolume=h, evaluations=evals) for i, h in enumerate(hvs)]
+
+    cold = runs("cold", [300, 310, 320, 330, 340])
+    # warm's median is at most 120 whatever its fifth seed reaches: cold already wins.
+    assert bench.verdict(cold + runs("warm", [100, 110, 120, 130]), 5) == "cold"
+    # a fifth warm seed above 400 would put warm's median at 400: undecided.
+    assert bench.verdict(cold + runs("warm", [100, 110, 400, 410]), 5) is None
+    assert bench.verdict(cold + runs("warm", [100, 110, 400, 410, 420]), 5) == "warm"
+    # within 0.5 %: the fewer evaluations decide, and only once every seed is in.
+    assert bench.verdict(cold + runs("warm", [320.5] * 5, evals=6_000), 5) == "warm"
+    assert bench.verdict(cold + runs("warm", [320.5] * 4, evals=6_000), 5) is None
+    assert bench.verdict(runs("cold", [300, 310]) + runs("warm", [100, 110, 120, 130]), 5) is None
+
+
 def test_the_reproductions_default_optimiser_is_the_one_the_seeds_chose():
     """docs/optimiser-choice/runs.json holds the cold and warm runs over seeds
     (``python benches/optimiser_choice.py``); the rule of that bench picks the default, and
     the reproduction and the CLI use it."""
-    import importlib.util
     import json
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
-    spec = importlib.util.spec_from_file_location("optimiser_choice", root / "benches" / "optimiser_choice.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    runs = json.loads((root / "docs" / "optimiser-choice" / "runs.json").read_text())
+    bench = _optimiser_choice_bench()
+    runs = json.loads((ROOT / "docs" / "optimiser-choice" / "runs.json").read_text())
     for r in runs:  # every record is a whole run of the stated budget, its history consistent
         assert r["history"][-1] == [r["evaluations"], r["hypervolume"]] and len(r["history"]) == r["generations"] <= bench.N_GEN
     chosen = bench.verdict(runs, n_seeds=5)
