@@ -367,9 +367,10 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
     """:func:`vtb.sweep` over samples and speeds (what it calls when given ``samples`` or
     ``speeds``): the grid and an uncontrolled run on every case and, with ``out`` (a
     directory), one journal per case, ``out/v<speed>_seed<seed>.csv``, so an interrupted study
-    resumes. The cases of one speed run as one batch: their uncontrolled runs share one model,
-    their controlled runs another, and each runs in lockstep groups on every core, or in tasks
-    on ``executor`` (:mod:`vtb.scaleout`); a case is journaled as soon as it is known."""
+    resumes. Every case runs in one batch (a speed's uncontrolled runs share one model, its
+    controlled runs another), in lockstep groups on every core or in tasks on ``executor``
+    (:mod:`vtb.scaleout`): one batch, not one per speed, so that the groups of all speeds
+    share out the cores or workers evenly. A case is journaled as soon as it is known."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
     config, grid_cases = tid_sweep.plan(config, b_t, k_t, c_t)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
@@ -393,27 +394,23 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
             from tqdm.auto import tqdm
 
             bar = stack.enter_context(tqdm(total=total, initial=done, desc="vtb robust sweep", unit="run"))
-        for v in dict.fromkeys(st[0] for st in state):
-            group = [st for st in state if st[0] == v and st[5]]
-            jobs = [(st, case) for st in group for case in st[5]]
-            if not jobs:
-                continue
+        jobs = [(st, case) for st in state for case in st[5]]
 
-            def finished(i, r, jobs=jobs):
-                # each case's row journaled as soon as its lockstep group finishes
-                nonlocal done
-                st, case = jobs[i]
-                row = tid_sweep.case_rows([case], [r])
-                if st[3] is not None:
-                    jr.append(st[3], row, tid_sweep.LAYOUT)
-                st[4].extend(row)
-                done += 1
-                if bar is not None:
-                    bar.update(done - bar.n)
-                if report is not None:
-                    report(done, total)
+        def finished(i, r):
+            # each case's row journaled as soon as its lockstep group finishes
+            nonlocal done
+            st, case = jobs[i]
+            row = tid_sweep.case_rows([case], [r])
+            if st[3] is not None:
+                jr.append(st[3], row, tid_sweep.LAYOUT)
+            st[4].extend(row)
+            done += 1
+            if bar is not None:
+                bar.update(done - bar.n)
+            if report is not None:
+                report(done, total)
 
-            run_cases([case_config(st[2], c["b_t"], c["k_t"], c["c_t"]) for st, c in jobs], finished, executor=executor, threads=threads, chunk=chunk)
+        run_cases([case_config(st[2], c["b_t"], c["k_t"], c["c_t"]) for st, c in jobs], finished, executor=executor, threads=threads, chunk=chunk)
     return RobustSweep([(v, s, result_of(rows, cfg, tid_sweep.LAYOUT, tid_sweep.SweepResult, journal=j)) for v, s, cfg, j, rows, _ in state], statistic_name, config)
 
 
