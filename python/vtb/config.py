@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import json
 import math
 import sys
@@ -350,8 +351,11 @@ class Config(StrictFields):
             disc["omega_r"] = self.excitation_omega_r()
         if d.get("tids") is None:
             d.pop("tids", None)
-        _check_finite(d, "")
-        return json.dumps(d, allow_nan=False)
+        try:
+            return json.dumps(d, allow_nan=False)
+        except (TypeError, ValueError):
+            _check_finite(d, "")  # names the field that JSON cannot carry
+            raise
 
     @classmethod
     def from_dict(cls, data: dict) -> "Config":
@@ -450,12 +454,21 @@ def _drop_none(x):
     return x
 
 
+@functools.lru_cache(maxsize=None)
+def _field_names(cls) -> tuple:
+    """A dataclass's field names (``dataclasses.fields`` is slow enough to show in a study's
+    set-up, which converts thousands of configurations)."""
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
 def _to_plain(obj):
+    if obj is None or type(obj) in (float, int, str, bool):  # exact types: numpy scalars convert below
+        return obj
     if isinstance(obj, (RayleighRatio, RayleighCoefficients)):
         kind = "ratio" if isinstance(obj, RayleighRatio) else "coefficients"
-        return {"kind": kind, **{f.name: _to_plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
+        return {"kind": kind, **{n: _to_plain(getattr(obj, n)) for n in _field_names(type(obj))}}
     if dataclasses.is_dataclass(obj):
-        return {f.name: _to_plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+        return {n: _to_plain(getattr(obj, n)) for n in _field_names(type(obj))}
     if isinstance(obj, (list, tuple)):
         return [_to_plain(v) for v in obj]
     if hasattr(obj, "tolist"):  # numpy arrays and scalars
