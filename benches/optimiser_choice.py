@@ -90,6 +90,39 @@ def hv_at(history, evals: int):
     return max(hv for n, hv in history if n <= evals)
 
 
+#: Tolerances of the hypervolume stop compared in the report, over the rule's own window.
+STOP_TOLS = (3e-4, 1e-3, 3e-3, 1e-2)
+
+
+def stopped_at(history, tol: float, window: int):
+    """The first (generation, evaluations, hypervolume) at which ``stop_hv=(tol, window)`` would
+    have stopped a run of this history, or ``None`` within the recorded generations."""
+    hv = [h for _, h in history]
+    for g in range(window + 1, len(hv) + 1):
+        if vtb.moga.hypervolume_settled(hv[:g], tol, window):
+            return g, history[g - 1][0], hv[g - 1]
+    return None
+
+
+def stop_table(runs: list) -> list:
+    """The report's section on the stop: where each tolerance would have stopped each run."""
+    window = STOP_HV[1]
+    L = ["## The stop", "",
+         f"Where the hypervolume stop with each tolerance (over {window} generations, as the rule's) would have stopped each "
+         "run: evaluations, and the hypervolume then as a share of the run's final one. —: not within the run's record (a run "
+         "that reached the cap never met that tolerance; a run the rule stopped ends there, so a tighter one cannot be followed "
+         "beyond it).", "",
+         "| start | seed | " + " | ".join(f"{t:g}" + (" (the rule)" if t == STOP_HV[0] else "") for t in STOP_TOLS) + " |",
+         "|---|---|" + "---|" * len(STOP_TOLS)]
+    for r in runs:
+        cells = []
+        for t in STOP_TOLS:
+            s = stopped_at(r["history"], t, window)
+            cells.append("—" if s is None else f"{s[1]} ({100 * s[2] / r['hypervolume']:.1f} %)")
+        L.append(f"| {r['start']} | {r['seed']} | " + " | ".join(cells) + " |")
+    return L
+
+
 def report(out: Path, runs: list, n_seeds: int) -> None:
     from vtb.plotting import plot_hypervolume
 
@@ -136,7 +169,7 @@ def report(out: Path, runs: list, n_seeds: int) -> None:
             L.append("")
         L.append(f"**Verdict: the {v} start** is the reproduction's default (`vtb reproduce --optimiser {v}`; "
                  "tests/test_optimize.py holds the default equal to this verdict).")
-    L += ["", "![hypervolume against evaluations, every seed](fig_hypervolume_seeds.png)"]
+    L += ["", *stop_table(runs), "", "![hypervolume against evaluations, every seed](fig_hypervolume_seeds.png)"]
     (out / "report.md").write_text("\n".join(L) + "\n")
 
 

@@ -982,14 +982,21 @@ def _given_points(problem: Problem, space: _Space, initial) -> tuple:
     return Z[new], X[new], F[new], G[new], constraint_violation(G[new], int(new.sum()))
 
 
+def hypervolume_settled(hypervolumes, tol: float, window: int) -> bool:
+    """The ``stop_hv=(tol, window)`` test on a run's hypervolumes, one per generation: the
+    last ``window`` + 1 of them span less than ``tol`` relative to the last."""
+    if len(hypervolumes) <= window:
+        return False
+    hv = np.asarray(hypervolumes[-(window + 1):], dtype=float)
+    return bool(hv[-1] > 0 and (hv.max() - hv.min()) / hv[-1] < tol)
+
+
 def _stop_reason(algo, history: list, n_gen: int, stop_hv) -> str:
     """Why the run stops after the last generation of ``history`` ("" to go on)."""
     if algo.stalled():
         return "average change in the spread of Pareto solutions less than function_tolerance"
-    if stop_hv is not None and len(history) > stop_hv[1]:
-        hv = np.array([h.hypervolume for h in history[-(stop_hv[1] + 1):]])
-        if hv[-1] > 0 and (hv.max() - hv.min()) / hv[-1] < stop_hv[0]:
-            return f"hypervolume moved by less than {stop_hv[0]:g} (relative) over the last {stop_hv[1]} generations"
+    if stop_hv is not None and hypervolume_settled([h.hypervolume for h in history], *stop_hv):
+        return f"hypervolume moved by less than {stop_hv[0]:g} (relative) over the last {stop_hv[1]} generations"
     if len(history) >= n_gen:
         return f"reached n_gen = {n_gen}"
     return ""
