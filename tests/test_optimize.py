@@ -344,6 +344,20 @@ def test_the_optimiser_rule_decides_before_the_last_runs_only_when_they_cannot_c
     assert bench.verdict(runs("cold", [300, 310]) + runs("warm", [100, 110, 120, 130]), 5) is None
 
 
+def test_the_stop_table_finds_where_each_tolerance_would_have_stopped():
+    """The bench's stop table replays the optimiser's own stop test: hypervolume 100, 110, …
+    up to 200 at generation 11, then flat. Over a window of 10 generations the test looks at the
+    last 11 values: at generation 19 they span 180–200 (10 % of 200), at 20 190–200 (5 %), at
+    21 nothing. So a tolerance of 0.11 stops at 19, 0.06 at 20, 1e-3 at 21."""
+    bench = _optimiser_choice_bench()
+    hv = [100.0 + 10 * g for g in range(11)] + [200.0] * 15
+    history = [[100 * (g + 1), h] for g, h in enumerate(hv)]
+    assert bench.stopped_at(history, 1e-3, 10) == (21, 2100, 200.0)
+    assert bench.stopped_at(history[:20], 1e-3, 10) is None
+    assert bench.stopped_at(history, 0.06, 10) == (20, 2000, 200.0)
+    assert bench.stopped_at(history, 0.11, 10) == (19, 1900, 200.0)
+
+
 def test_the_reproductions_default_optimiser_is_the_one_the_seeds_chose():
     """docs/optimiser-choice/runs.json holds the cold and warm runs over seeds
     (``python benches/optimiser_choice.py``); the rule of that bench picks the default, and
