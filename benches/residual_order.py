@@ -53,7 +53,7 @@ def expansions(c, x):
     red = synthesis.reduction(c)
     system = track._assemble(synthesis._structure_config(c))
     s = track._shape_matrix(system, 0, np.array([x])).toarray()[:, 0]
-    p = s @ red.psi
+    p = red.project(s)
     term = p * p
     iw = 2j * math.pi * F[:, None]
     pair = (red.weight == 2.0)[None, :]

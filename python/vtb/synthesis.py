@@ -34,7 +34,7 @@ import math
 import os
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -81,7 +81,9 @@ class Reduction:
     ψᵀ(2λM + C)ψ = 1), ``weight`` (2 for a pair, 1 for a real mode), the rail residual's
     moments R₀, R₁, R₂ as bands ``residual`` (3 × rail_dofs × (band + 1); m/N, m·s/N, m·s²/N),
     ``key`` (what it was built from), the build
-    time ``seconds`` and, once handed to the core, ``core`` (the :class:`vtb._core.Reduction`)."""
+    time ``seconds`` and, once handed to the core, ``core`` (the :class:`vtb._core.Reduction`).
+    ψ then lives in the core alone (``psi`` is ``None``; :meth:`project` reads it there), so
+    that a process holds one copy of it, not two."""
 
     key: str
     cutoff: float
@@ -100,18 +102,30 @@ class Reduction:
     def n_modes(self) -> int:
         return int(self.lam.size)
 
-    @property
-    def nbytes(self) -> int:
-        """Memory of the arrays (bytes); the core holds a copy of the same size."""
-        return int(self.psi.nbytes + self.lam.nbytes + self.weight.nbytes + self.residual.nbytes)
+    nbytes: int = field(init=False, repr=False)
+    """Memory of the arrays as built or loaded (bytes); the core's copy is the same size."""
+
+    def __post_init__(self):
+        self.nbytes = int(self.psi.nbytes + self.lam.nbytes + self.weight.nbytes + self.residual.nbytes)
 
     def to_core(self):
+        """The core's copy (made once); ψ is then dropped here."""
         if self.core is None:
             flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
             self.core = _core.Reduction(
                 int(self.psi.shape[0]), flat(self.lam.real), flat(self.lam.imag), flat(self.weight),
                 flat(self.psi.real), flat(self.psi.imag), int(self.rail_dofs), int(self.band), flat(self.residual))
+            self.psi = None
         return self.core
+
+    def project(self, shapes: np.ndarray) -> np.ndarray:
+        """sᵀψ (complex, per mode) for a shape vector over the DOFs (n_dofs,), or for each
+        column of shapes (n_dofs, k) → (k, n_modes); only the rows of ψ they touch are read."""
+        s = shapes.reshape(shapes.shape[0], -1)
+        rows = np.flatnonzero(np.any(s != 0.0, axis=1))
+        re, im = self.to_core().psi_rows(rows.tolist())
+        out = s[rows].T @ (re + 1j * im)
+        return out[0] if shapes.ndim == 1 else out
 
 
 def _structure_config(config: Config) -> Config:
@@ -321,7 +335,7 @@ def _within_budget(red: Reduction, config: Config) -> Reduction:
     need = 2 * red.nbytes
     if need > config.solver.memory_budget:
         raise config_error("solver.memory_budget", config.solver.memory_budget,
-                           f"the synthesis reduction of this structure holds {need / 1e9:.3g} GB ({red.n_modes} modes' "
+                           f"the synthesis reduction of this structure needs {need / 1e9:.3g} GB while it loads ({red.n_modes} modes' "
                            f"arrays and the core's copy); raise the budget or lower discretisation.synthesis_cutoff")
     return red
 
@@ -341,7 +355,7 @@ def receptance(config: Config, x: float, frequencies, response_x=None) -> np.nda
     xr, scalar = (xf, True) if response_x is None else _positions(response_x, system.length, "response_x")
     sf = _shape_matrix(system, 0, xf).toarray()[:, 0]
     sr = _shape_matrix(system, 0, xr).toarray()
-    pf, pr = sf @ red.psi, sr.T @ red.psi  # (m,), (n_points, m)
+    pf, pr = red.project(sf), red.project(sr)  # (m,), (n_points, m)
     resid = np.array([_band_form(red.residual[0], red, sr[:, i], sf) for i in range(sr.shape[1])])
     nz = np.flatnonzero(sf[: red.rail_dofs])
     alpha, beta = red.to_core().residual_filter(int(nz[0]), sf[nz[0]: nz[-1] + 1].tolist()) or (0.0, 0.0)

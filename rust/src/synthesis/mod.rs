@@ -180,6 +180,27 @@ impl Reduction {
         self.n_dofs
     }
 
+    /// Rows of ψ (the modes at those DOFs) as (re, im), `rows.len()` × modes, row-major: what
+    /// a caller outside the engine reads of ψ (the rail's receptance), so that it need not keep
+    /// a second copy of it.
+    pub fn psi_rows(&self, rows: &[usize]) -> Result<(Vec<f64>, Vec<f64>)> {
+        let mut re = Vec::with_capacity(rows.len() * self.m);
+        let mut im = Vec::with_capacity(rows.len() * self.m);
+        for &i in rows {
+            if i >= self.n_dofs {
+                return Err(refuse(
+                    "psi_rows",
+                    i,
+                    &format!("is not a DOF (the reduction has {})", self.n_dofs),
+                ));
+            }
+            let (r, m) = self.row(i);
+            re.extend_from_slice(&r[..self.m]);
+            im.extend_from_slice(&m[..self.m]);
+        }
+        Ok((re, im))
+    }
+
     /// Memory held (bytes).
     pub fn bytes(&self) -> usize {
         8 * (self.lam_re.len() * 3 + self.psi_re.len() * 2 + self.residual.len())
@@ -323,5 +344,30 @@ mod tests {
             .unwrap_err();
             assert!(e.to_string().contains(field), "{e}");
         }
+    }
+
+    #[test]
+    fn psi_rows_give_back_the_rows_handed_in() {
+        // 3 modes (padded inside to the stride) on 4 DOFs, ψ_j(i) = 10 i + j (re), its negative (im).
+        let (n, m) = (4, 3);
+        let re: Vec<f64> = (0..n * m).map(|k| (10 * (k / m) + k % m) as f64).collect();
+        let im: Vec<f64> = re.iter().map(|x| -x).collect();
+        let red = Reduction::new(
+            n,
+            vec![-1.0; m],
+            vec![1.0; m],
+            vec![2.0; m],
+            re,
+            im,
+            n,
+            0,
+            vec![0.0; 3 * n],
+        )
+        .unwrap();
+        let (r, i) = red.psi_rows(&[2, 0]).unwrap();
+        assert_eq!(r, [20.0, 21.0, 22.0, 0.0, 1.0, 2.0]);
+        assert_eq!(i, [-20.0, -21.0, -22.0, -0.0, -1.0, -2.0]);
+        let e = red.psi_rows(&[1, 4]).unwrap_err();
+        assert!(e.to_string().contains("reduction.psi_rows"), "{e}");
     }
 }

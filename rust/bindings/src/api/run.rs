@@ -3,7 +3,7 @@
 use crate::convert::{make_profile, parse_config, result_to_dict};
 use crate::detach::run_detached;
 use crate::errors::{make_exception, to_py_err};
-use numpy::PyReadonlyArray1;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -63,6 +63,21 @@ impl Reduction {
     #[getter]
     fn nbytes(&self) -> usize {
         self.0.bytes()
+    }
+
+    /// Rows of ψ at the DOFs `rows`: (re, im), each `len(rows)` × modes.
+    #[allow(clippy::type_complexity)]
+    fn psi_rows<'py>(
+        &self,
+        py: Python<'py>,
+        rows: Vec<usize>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        let (re, im) = self.0.psi_rows(&rows).map_err(|e| to_py_err(py, e))?;
+        let shape = [rows.len(), self.0.n_modes()];
+        Ok((
+            PyArray1::from_vec(py, re).reshape(shape)?,
+            PyArray1::from_vec(py, im).reshape(shape)?,
+        ))
     }
 
     /// The reduction's static flexibility sᵀK⁻¹s at rail shapes (start, values) pairs.
