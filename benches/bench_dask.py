@@ -4,8 +4,8 @@ this process on every core; the speed-up from one worker to two, measured in one
 
     python benches/bench_dask.py [--samples 8] [--t-end 0.6] [--repeat 3]
 
-Both clusters start together and each worker loads the cached reduction once (a warm-up run
-per worker, not timed); then the study runs ``--repeat`` times on each, alternating between
+Both clusters start together (``vtb.scaleout.local_cluster``: Dask set up for studies) and
+each worker loads the cached reduction before the clock starts; then the study runs ``--repeat`` times on each, alternating between
 them so that the machine's load (it is shared) falls on both alike, and each keeps its best
 time. Prints every time, the speed-up of the best times and whether the results are bit for
 bit those of the in-process run, and the in-process run on one core and on every core. The machine's own scaling, with no vtb in the loop, is ``benches/machine_scaling.py``'s.
@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 import vtb
+from vtb.scaleout import local_cluster
 from vtb.tid_sweep import COLUMNS
 
 
@@ -39,15 +40,13 @@ def main():
     ap.add_argument("--t-end", type=float, default=0.6)
     ap.add_argument("--repeat", type=int, default=3, help="timed studies per cluster, alternated; the best counts (default 3)")
     args = ap.parse_args()
-    from dask.distributed import Client, LocalCluster
-
     cfg = vtb.paper_config(model="fast", calibrated=True)
     cfg.solver.t_end = args.t_end
     cfg.tids = vtb.tids_around(cfg)
     warm = cfg.copy()
     warm.solver.t_end = 0.01
     n_runs = 2 * args.samples * (4 + 1)  # 2 speeds × samples × (4 designs + the uncontrolled run)
-    vtb.simulate(warm)  # this process's reduction
+    vtb.simulate(warm)  # this process's reduction, and the disk cache the workers load
     t0 = time.perf_counter()
     local = study(cfg, args.samples)
     t_local = time.perf_counter() - t0
@@ -57,11 +56,8 @@ def main():
     times = {1: [], 2: []}
     with contextlib.ExitStack() as stack:
         executors = {}
-        for n in times:
-            cluster = stack.enter_context(LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None))
-            client = stack.enter_context(Client(cluster))
-            client.run(vtb.simulate, warm)  # on every worker: each holds the reduction before the clock starts
-            executors[n] = client.get_executor()
+        for n in times:  # every worker holds the reduction before the clock starts
+            executors[n] = stack.enter_context(local_cluster(n, preload=warm))
         for _ in range(args.repeat):
             for n, ex in executors.items():
                 t0 = time.perf_counter()

@@ -4,6 +4,7 @@ together, and each gives the bits it gives alone; a failing job never spoils its
 import math
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -98,3 +99,27 @@ def test_ctrl_c_stops_a_long_batch_within_a_second(default_sigint):
     with pytest.raises(KeyboardInterrupt):
         vtb.simulate_batch(cfgs, threads=2)
     assert sent and time.perf_counter() - sent[0] < 1.0
+
+
+def test_runs_on_one_sample_share_its_profile_which_is_the_sample_drawn_afresh(monkeypatch):
+    from vtb.simulate import irregularity_profile
+
+    a = vtb.paper_config()
+    a.irregularity.seed = 11
+    b = a.copy()
+    b.tids = vtb.tids_around(b, count=2, x=8.0)
+    b.speed = a.speed * 1.1  # the wheels stay on the structure: the same stretch
+    c = a.copy()
+    c.irregularity.seed = 12
+    pa, pb, pc = irregularity_profile(a), irregularity_profile(b), irregularity_profile(c)
+    assert pa is pb and pc is not pa and not np.array_equal(pa.values, pc.values)
+    assert not pa.values.flags.writeable  # shared: nobody may change it
+    x0, dx, values, _ = a.irregularity.sample(0.0, a.structure.length)  # drawn afresh, no cache
+    assert (pa.x0, pa.dx) == (x0, dx) and np.array_equal(pa.values, values)
+    # a cache too small for two keeps the newest only, and gives the same profiles
+    monkeypatch.setattr(sys.modules["vtb.simulate"], "PROFILE_CACHE_BYTES", pa.values.nbytes)
+    d = a.copy()
+    d.irregularity.seed = 13
+    irregularity_profile(d)  # inserting d's leaves it alone in the cache
+    fresh = irregularity_profile(a.copy())
+    assert fresh is not pa and np.array_equal(fresh.values, values)

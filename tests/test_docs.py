@@ -143,3 +143,11 @@ def test_no_page_or_generated_report_carries_an_absolute_path():
     found = [f"{p.relative_to(root)}:{i + 1}" for p in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
              for i, line in enumerate(p.read_text().splitlines()) if pattern.search(line)]
     assert not found, found
+
+
+def test_the_scaleout_page_gives_hand_started_workers_the_study_settings():
+    from vtb.scaleout import dask_environment
+
+    text = (ROOT / "docs" / "scaleout.md").read_text()
+    for k, v in dask_environment().items():
+        assert f"{k}={v}" in text, k

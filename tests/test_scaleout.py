@@ -98,3 +98,24 @@ def test_runs_of_a_lost_worker_are_reported_as_failed(short):
     assert "BrokenProcessPool" in str(seen[0])
     sw = vtb.sweep(short, b_t=[5.0], k_t=[2e8], c_t=[1e3], executor=Broken(), progress=False)
     assert all("worker failed" in e for e in sw.columns["error"])
+
+
+def test_a_local_cluster_runs_its_workers_with_the_study_settings():
+    import dask
+
+    def settings():
+        return {k: dask.config.get(k) for k in scaleout.DASK_SETTINGS}
+
+    with scaleout.local_cluster(1) as ex:
+        on_worker = ex.submit(settings).result()
+    assert on_worker == scaleout.DASK_SETTINGS != settings()  # this process keeps Dask's defaults
+    # workers started by hand read the same settings from dask_environment()'s variables
+    with dask.config.set(dask.config.collect_env(scaleout.dask_environment())):
+        assert settings() == scaleout.DASK_SETTINGS
+
+
+@pytest.mark.parametrize("n", [0, -2, 1.5, True, "2"])
+def test_a_local_cluster_refuses_a_worker_count_that_is_not_a_whole_number_from_1(n):
+    with pytest.raises(vtb.ConfigError, match="n_workers"):
+        with scaleout.local_cluster(n):
+            pass

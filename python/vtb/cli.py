@@ -226,7 +226,7 @@ def study_executor(args):
     except (OSError, TimeoutError) as e:
         raise config_error("--scheduler", address, f"no Dask scheduler answers there ({type(e).__name__}: {e})") from None
     with client:
-        yield client.get_executor()
+        yield client.get_executor(pure=False)  # a study never repeats a task: no content hashing
 
 
 def cmd_validate(args) -> int:

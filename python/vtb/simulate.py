@@ -4,14 +4,17 @@ parallel inside the Rust core (all cores, GIL released)."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import sys
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _core
-from .config import Config, check_types
+from .config import Config, _to_plain, check_types
 from .irregularity import Irregularity
 from .errors import VtbError, config_error
 
@@ -93,9 +96,20 @@ class SampledProfile(NamedTuple):
     treads: list
 
 
+#: Bytes of generated profiles this process keeps (the least recently used go first).
+PROFILE_CACHE_BYTES = 256 * 2**20
+_profiles: OrderedDict = OrderedDict()
+_profiles_lock = threading.Lock()
+
+
 def irregularity_profile(cfg: Config) -> SampledProfile:
-    """The sampled irregularity a configuration runs on. A structure length the core will
-    refuse gets no profile (the core then names the length)."""
+    """The sampled irregularity a configuration runs on (arrays read-only). A structure length
+    the core will refuse gets no profile (the core then names the length).
+
+    A profile is a function of the irregularity, the stretch the wheels travel, the memory
+    budget and the wheels' radii alone, and generating one costs tens of milliseconds: this
+    process keeps the last ones (:data:`PROFILE_CACHE_BYTES`), so the runs of a study on one
+    sample — every design, every generation, every executor task on this worker — share it."""
     L = _real(getattr(cfg.structure, "length", None))
     if L is None or L <= 0:
         return SampledProfile(0.0, 1.0, np.zeros(0), [])
@@ -107,10 +121,24 @@ def irregularity_profile(cfg: Config) -> SampledProfile:
     except (VtbError, ValueError, TypeError):  # refused later, naming the field
         travel = None
     lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
+    key = (json.dumps(_to_plain(cfg.irregularity), default=repr), lo, hi, budget, tuple(radii))
+    with _profiles_lock:
+        if key in _profiles:
+            _profiles.move_to_end(key)
+            return _profiles[key]
     x0, dx, values, treads = cfg.irregularity.sample(lo - _PROFILE_MARGIN, hi + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
     if treads and not values.size:
         values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
-    return SampledProfile(x0, dx, values, treads)
+    for a in (values, *treads):
+        a.flags.writeable = False  # shared by every run on this sample
+    profile = SampledProfile(x0, dx, values, treads)
+    with _profiles_lock:
+        _profiles[key] = profile
+        total = sum(p.values.nbytes + sum(t.nbytes for t in p.treads) for p in _profiles.values())
+        while total > PROFILE_CACHE_BYTES and len(_profiles) > 1:
+            _, old = _profiles.popitem(last=False)
+            total -= old.values.nbytes + sum(t.nbytes for t in old.treads)
+    return profile
 
 
 def _profile_args(profile: SampledProfile) -> tuple:
@@ -455,7 +483,7 @@ def simulate_batch(
     ``threads``: worker threads (default: all cores). ``progress``: ``True`` for a tqdm bar,
     or a callable ``f(done)``. ``on_error``: ``"raise"`` raises the first failure,
     ``"return"`` puts the exception object in its place and continues. Configurations that
-    share an irregularity specification share one generated profile. Ctrl-C interrupts the
+    share an irregularity sample share one generated profile (:func:`irregularity_profile`). Ctrl-C interrupts the
     batch within a fraction of a second.
 
     ``on_result``: ``f(i, item)``, called from the calling thread as soon as each run's
@@ -472,21 +500,16 @@ def simulate_batch(
     order = []
     for i, cfg in enumerate(configs):
         try:
-            if not isinstance(cfg, Config):
-                raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
-            key = (repr(cfg.irregularity), repr(getattr(cfg.structure, "length", None)), repr(getattr(cfg.solver, "memory_budget", None)))
-            if key not in keys:
-                text, profile = _prepare(cfg)
-                keys[key] = len(profiles)
-                profiles.append(_profile_args(profile))
-            else:
-                text = cfg.to_core_json()
+            text, profile = _prepare(cfg)  # every configuration checked; one sample's runs share its profile
         except VtbError as e:
             if on_error == "raise":
                 raise
             results[i] = e
             continue
-        profile_index.append(keys[key])
+        if id(profile) not in keys:  # (held in keys: an id is not reused while the batch runs)
+            keys[id(profile)] = (len(profiles), profile)
+            profiles.append(_profile_args(profile))
+        profile_index.append(keys[id(profile)][0])
         jsons.append(text)
         order.append(i)
     bar, callback = None, None
