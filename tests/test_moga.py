@@ -601,6 +601,43 @@ def test_killed_run_resumes_bitwise_identical(algorithm, tmp_path):
     assert calls == []
 
 
+def test_a_resumed_run_counts_the_wall_time_of_every_session(tmp_path):
+    """Each generation records the run's wall time so far; a run killed after generation 3 and
+    resumed goes on from the time its first session took, so its last generation holds at least
+    the time its evaluations slept in both (0.02 s each); a checkpoint written before the record
+    resumes with the time unknown."""
+    import json
+    import time
+
+    def slow(X):
+        time.sleep(0.02)
+        return TNK.evaluate(X)
+
+    problem = Problem(TNK.lower, TNK.upper, TNK.n_obj, slow, TNK.n_constr)
+    kw = dict(pop_size=12, n_gen=6, seed=3, hv_ref=TNK_REF)
+    ck = tmp_path / "run.ckpt"
+
+    def kill(gen, pop):
+        if gen.gen == 3:
+            raise Killed
+
+    with pytest.raises(Killed):
+        minimize(problem, "nsga2", checkpoint=ck, callback=kill, **kw)
+    with np.load(ck) as z:
+        state = {k: z[k] for k in z.files}
+    header = json.loads(str(state.pop("header")))
+    first = header["history"][-1]["seconds"]
+    assert first >= 3 * 0.02
+    res = minimize(problem, "nsga2", checkpoint=ck, **kw)
+    seconds = [g.seconds for g in res.history]
+    assert seconds[2] == first and seconds == sorted(seconds) and seconds[-1] >= first + 3 * 0.02
+    # the same checkpoint without the record: the time is unknown, not a guess
+    header["history"] = [{k: v for k, v in g.items() if k != "seconds"} for g in header["history"]]
+    np.savez(tmp_path / "old.npz", header=np.array(json.dumps(header)), **state)
+    old = minimize(problem, "nsga2", checkpoint=tmp_path / "old.npz", **kw)
+    assert all(g.seconds is None for g in old.history) and old.history == res.history
+
+
 def test_gamultiobj_resumed_run_keeps_its_spread_memory(tmp_path):
     """The stall test looks back max_stall_generations spreads: a run killed after generation
     4 and resumed stalls at the generation the uninterrupted run stalls at."""

@@ -74,6 +74,7 @@ import hashlib
 import json
 import math
 import os
+import time
 import uuid
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -185,8 +186,10 @@ class Population:
 class Generation:
     """Per-generation summary: generation number (1 = initial population), evaluations so far,
     feasible points in the population, size of its first front, smallest violation,
-    hypervolume of the feasible first front (when :func:`minimize` got ``hv_ref``) and the
-    gamultiobj spread (``None`` for NSGA-II)."""
+    hypervolume of the feasible first front (when :func:`minimize` got ``hv_ref``), the
+    gamultiobj spread (``None`` for NSGA-II) and the run's wall time up to the end of this
+    generation (s), summed over the sessions of a resumed run (``None`` after a checkpoint
+    written before vtb kept it)."""
 
     gen: int
     n_evals: int
@@ -195,6 +198,7 @@ class Generation:
     cv_min: float
     hypervolume: Optional[float] = None
     spread: Optional[float] = None
+    seconds: Optional[float] = field(default=None, compare=False)  # a timing: runs alike compare equal
 
 
 @dataclass
@@ -929,6 +933,8 @@ def minimize(
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_gen, initial=len(history), desc=f"vtb {algorithm}", unit="gen")
+    # wall time carries over a resume: the sessions before this one took history[-1].seconds
+    before, t0 = (history[-1].seconds if history else 0.0), time.perf_counter()
     try:
         while not message:
             gen = len(history) + 1
@@ -937,7 +943,7 @@ def minimize(
             else:
                 algo.step()
             pop = algo.population()
-            history.append(_summary(gen, evaluate.n_evals, pop, hv_ref, algo.spread))
+            history.append(_summary(gen, evaluate.n_evals, pop, hv_ref, algo.spread, None if before is None else before + time.perf_counter() - t0))
             message = _stop_reason(algo, history, n_gen, stop_hv)
             if checkpoint is not None:
                 _save_checkpoint(checkpoint, identity, algo, rng, evaluate.n_evals, history, message)
@@ -1002,13 +1008,13 @@ def _stop_reason(algo, history: list, n_gen: int, stop_hv) -> str:
     return ""
 
 
-def _summary(gen: int, n_evals: int, pop: Population, hv_ref, spread: Optional[float]) -> Generation:
+def _summary(gen: int, n_evals: int, pop: Population, hv_ref, spread: Optional[float], seconds: Optional[float]) -> Generation:
     front = pop.rank == 0
     feasible = pop.CV <= 0
     hv = None if hv_ref is None else hypervolume_2d(pop.F[front & feasible], hv_ref)
     return Generation(
         gen=gen, n_evals=n_evals, n_feasible=int(feasible.sum()), n_front=int(front.sum()),
-        cv_min=float(pop.CV.min()), hypervolume=hv, spread=spread,
+        cv_min=float(pop.CV.min()), hypervolume=hv, spread=spread, seconds=seconds,
     )
 
 
