@@ -172,9 +172,9 @@ def test_bad_input_names_the_field():
         with pytest.raises(vtb.ConfigError, match="discretisation.synthesis_cutoff"):
             vtb.simulate(b)
     with pytest.raises(vtb.ConfigError, match="reduction.lambda"):
-        vtb._core.Reduction(1, np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(3))
+        vtb._core.Reduction(np.array([1.0]), np.array([2.0]), np.array([2.0]), np.zeros((1, 1), complex), 1, 0, np.zeros(3))
     with pytest.raises(vtb.ConfigError, match="reduction.residual"):  # one moment instead of three
-        vtb._core.Reduction(1, np.array([-1.0]), np.array([2.0]), np.array([2.0]), np.zeros(1), np.zeros(1), 1, 0, np.zeros(1))
+        vtb._core.Reduction(np.array([-1.0]), np.array([2.0]), np.array([2.0]), np.zeros((1, 1), complex), 1, 0, np.zeros(1))
 
 
 def test_a_reduction_beyond_the_memory_budget_is_refused():

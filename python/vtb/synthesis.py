@@ -112,9 +112,9 @@ class Reduction:
         """The core's copy (made once); ψ is then dropped here."""
         if self.core is None:
             flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
-            self.core = _core.Reduction(
-                int(self.psi.shape[0]), flat(self.lam.real), flat(self.lam.imag), flat(self.weight),
-                flat(self.psi.real), flat(self.psi.imag), int(self.rail_dofs), int(self.band), flat(self.residual))
+            self.core = _core.Reduction(  # ψ read in place: no copy on this side
+                flat(self.lam.real), flat(self.lam.imag), flat(self.weight), np.ascontiguousarray(self.psi, dtype=complex),
+                int(self.rail_dofs), int(self.band), flat(self.residual))
             self.psi = None
         return self.core
 

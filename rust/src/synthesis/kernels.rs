@@ -426,15 +426,13 @@ mod tests {
         };
         let lam_re = (0..m).map(|_| -1.0 - next().abs()).collect();
         let lam_im = (0..m).map(|j| 100.0 * (j + 1) as f64).collect();
-        let psi_re = (0..n * m).map(|_| next()).collect();
-        let psi_im = (0..n * m).map(|_| next()).collect();
+        let psi: Vec<f64> = (0..2 * n * m).map(|_| next()).collect();
         Reduction::new(
             n,
             lam_re,
             lam_im,
             vec![2.0; m],
-            psi_re,
-            psi_im,
+            &psi,
             n,
             0,
             vec![0.0; 3 * n],

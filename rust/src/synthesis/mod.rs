@@ -85,16 +85,17 @@ fn refuse(field: &str, value: impl std::fmt::Display, why: &str) -> VtbError {
 
 impl Reduction {
     /// Checks every array's length and value: finite, Re λ < 0 (a stable structure), weights
-    /// 1 (real λ) or 2 (a pair). `psi_*` are n_dofs × m, row-major; `residual` holds the three
-    /// moments' bands one after the other.
+    /// 1 (real λ) or 2 (a pair). `psi` is n_dofs × m complex, row-major, each entry its real
+    /// then its imaginary part (numpy's complex128 layout), borrowed: the reduction's only
+    /// copy of it is its own padded one. `residual` holds the three moments' bands one after
+    /// the other.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         n_dofs: usize,
         lam_re: Vec<f64>,
         lam_im: Vec<f64>,
         weight: Vec<f64>,
-        psi_re: Vec<f64>,
-        psi_im: Vec<f64>,
+        psi: &[f64],
         rail_dofs: usize,
         band: usize,
         residual: Vec<f64>,
@@ -106,8 +107,7 @@ impl Reduction {
         for (name, len, want) in [
             ("lambda_im", lam_im.len(), m),
             ("weight", weight.len(), m),
-            ("psi_re", psi_re.len(), n_dofs * m),
-            ("psi_im", psi_im.len(), n_dofs * m),
+            ("psi", psi.len(), 2 * n_dofs * m),
             ("residual", residual.len(), 3 * rail_dofs * (band + 1)),
         ] {
             if len != want {
@@ -134,23 +134,32 @@ impl Reduction {
                 ));
             }
         }
-        for (name, v) in [
-            ("psi_re", &psi_re),
-            ("psi_im", &psi_im),
-            ("residual", &residual),
-        ] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(refuse(&format!("{name}[{i}]"), v[i], "must be finite"));
-            }
+        if let Some(k) = psi.iter().position(|x| !x.is_finite()) {
+            let (i, j, part) = (k / (2 * m), (k / 2) % m, ["re", "im"][k % 2]);
+            return Err(refuse(
+                &format!("psi[{i}, {j}].{part}"),
+                psi[k],
+                "must be finite",
+            ));
+        }
+        if let Some(i) = residual.iter().position(|x| !x.is_finite()) {
+            return Err(refuse(
+                &format!("residual[{i}]"),
+                residual[i],
+                "must be finite",
+            ));
         }
         let stride = m.next_multiple_of(PAD);
-        let pad_rows = |a: Vec<f64>| -> Vec<f64> {
-            let mut out = vec![0.0; n_dofs * stride];
-            for (dst, src) in out.chunks_exact_mut(stride).zip(a.chunks_exact(m)) {
-                dst[..m].copy_from_slice(src);
+        let (mut psi_re, mut psi_im) = (vec![0.0; n_dofs * stride], vec![0.0; n_dofs * stride]);
+        for ((re, im), src) in psi_re
+            .chunks_exact_mut(stride)
+            .zip(psi_im.chunks_exact_mut(stride))
+            .zip(psi.chunks_exact(2 * m))
+        {
+            for (j, z) in src.chunks_exact(2).enumerate() {
+                (re[j], im[j]) = (z[0], z[1]);
             }
-            out
-        };
+        }
         let pad = |mut a: Vec<f64>| {
             a.resize(stride, 0.0);
             a
@@ -162,8 +171,8 @@ impl Reduction {
             lam_re: pad(lam_re),
             lam_im: pad(lam_im),
             weight: pad(weight),
-            psi_re: pad_rows(psi_re),
-            psi_im: pad_rows(psi_im),
+            psi_re,
+            psi_im,
             rail_dofs,
             band,
             residual,
@@ -326,17 +335,16 @@ mod tests {
     fn a_bad_reduction_names_its_field() {
         // One mode on two DOFs: (Re λ, weight, psi_re length) and the field refused.
         for (lam_re, weight, n_psi, field) in [
-            (1.0, 2.0, 2, "reduction.lambda[0]"),
-            (-1.0, 1.0, 2, "reduction.weight[0]"),
-            (-1.0, 2.0, 3, "reduction.psi_re"),
+            (1.0, 2.0, 4, "reduction.lambda[0]"),
+            (-1.0, 1.0, 4, "reduction.weight[0]"),
+            (-1.0, 2.0, 3, "reduction.psi"),
         ] {
             let e = Reduction::new(
                 2,
                 vec![lam_re],
                 vec![3.0],
                 vec![weight],
-                vec![0.0; n_psi],
-                vec![0.0; 2],
+                &vec![0.0; n_psi],
                 2,
                 0,
                 vec![0.0; 6],
@@ -344,6 +352,21 @@ mod tests {
             .unwrap_err();
             assert!(e.to_string().contains(field), "{e}");
         }
+        // a non-finite entry is named by DOF, mode and part
+        let mut psi = vec![0.0; 4];
+        psi[3] = f64::NAN;
+        let e = Reduction::new(
+            2,
+            vec![-1.0],
+            vec![3.0],
+            vec![2.0],
+            &psi,
+            2,
+            0,
+            vec![0.0; 6],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("reduction.psi[1, 0].im"), "{e}");
     }
 
     #[test]
@@ -351,14 +374,13 @@ mod tests {
         // 3 modes (padded inside to the stride) on 4 DOFs, ψ_j(i) = 10 i + j (re), its negative (im).
         let (n, m) = (4, 3);
         let re: Vec<f64> = (0..n * m).map(|k| (10 * (k / m) + k % m) as f64).collect();
-        let im: Vec<f64> = re.iter().map(|x| -x).collect();
+        let psi: Vec<f64> = re.iter().flat_map(|&x| [x, -x]).collect();
         let red = Reduction::new(
             n,
             vec![-1.0; m],
             vec![1.0; m],
             vec![2.0; m],
-            re,
-            im,
+            &psi,
             n,
             0,
             vec![0.0; 3 * n],

@@ -3,7 +3,10 @@
 use crate::convert::{make_profile, parse_config, result_to_dict};
 use crate::detach::run_detached;
 use crate::errors::{make_exception, to_py_err};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use numpy::{
+    Complex64, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -29,24 +32,24 @@ impl Reduction {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        n_dofs: usize,
         lambda_re: PyReadonlyArray1<'_, f64>,
         lambda_im: PyReadonlyArray1<'_, f64>,
         weight: PyReadonlyArray1<'_, f64>,
-        psi_re: PyReadonlyArray1<'_, f64>,
-        psi_im: PyReadonlyArray1<'_, f64>,
+        psi: PyReadonlyArray2<'_, Complex64>,
         rail_dofs: usize,
         band: usize,
         residual: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Self> {
         let v = |a: PyReadonlyArray1<'_, f64>| a.as_array().to_vec();
+        // ψ read in place (C order): the core's padded copy is the only other one.
+        let n_dofs = psi.shape()[0];
+        let psi: &[f64] = bytemuck::cast_slice(psi.as_slice()?);
         vtb::synthesis::Reduction::new(
             n_dofs,
             v(lambda_re),
             v(lambda_im),
             v(weight),
-            v(psi_re),
-            v(psi_im),
+            psi,
             rail_dofs,
             band,
             v(residual),
