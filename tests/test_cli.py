@@ -52,6 +52,9 @@ def test_reproduce_quick(tmp_path):
     assert str(tmp_path) not in text and "`vtb reproduce --out rep --quick`" in text  # relative to its folder
     # the frequency view and one evidence paragraph per gap
     assert "## Frequency view" in text and "![one-third-octave levels](fig_third_octave.png)" in text
+    # the optimisation's start: why it is the default, and what the run took
+    optimisation = text.split("## §4.4")[1].split("\n## ")[0]
+    assert "* Why this start: the " in optimisation and "min) of wall time" in optimisation
     gaps = text.split("## The gaps between vtb and the article, and the evidence")[1].split("## Run times")[0]
     for gap in ("Rail displacement", "Slab acceleration", "Rail r.m.s. and stabilisation time", "The best sweep case", "The MOGA optimum", "Car body"):
         assert f"**{gap}" in gaps, gap

@@ -220,12 +220,16 @@ def _pct(x: float) -> str:
 def _optimiser_text(runs: dict, plan: dict) -> list:
     """The report's account of the optimisation runs and of their hypervolumes."""
     L = []
-    for label, (res, _) in runs.items():
+    for label, (res, seconds) in runs.items():
         m = res.moga
         start = (f"first population chosen among the sweep's cases within the bounds ({m.history[0].n_evals} random points added)" if label == "warm"
                  else "random first population") + f", stop when the hypervolume moves by less than {STOP_HV[0]:g} over {STOP_HV[1]} generations"
+        took = "run time unknown (its checkpoint predates the record)" if math.isnan(seconds) else f"{seconds:.0f} s ({seconds / 60:.1f} min) of wall time"
         L.append(f"* {label}: NSGA-II, population {m.pop.X.shape[0]}, at most {plan['n_gen']} generations, {start}: "
-                 f"{m.n_gen} generations, {m.n_evals} evaluations ({m.message}); hypervolume {m.history[-1].hypervolume:.6g} (m/s²)².")
+                 f"{m.n_gen} generations, {m.n_evals} evaluations ({m.message}), {took}; hypervolume {m.history[-1].hypervolume:.6g} (m/s²)².")
+    why = (f"the {DEFAULT_OPTIMISER} start is vtb's default (`vtb.reproduce.DEFAULT_OPTIMISER`), chosen by the median final hypervolume of "
+           "each start over five seeds, each run with this stop (docs/optimiser-choice/report.md in vtb's repository)")
+    L.append(f"* Why this start: {why}." if set(runs) == {DEFAULT_OPTIMISER} else f"* The start was chosen with `--optimiser`; {why}.")
     if len(runs) == 2 and runs["cold"][0].moga.history[-1].hypervolume > 0:
         w, c = runs["warm"][0].moga, runs["cold"][0].moga
         ratio = w.history[-1].hypervolume / c.history[-1].hypervolume
