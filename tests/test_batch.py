@@ -123,3 +123,15 @@ def test_runs_on_one_sample_share_its_profile_which_is_the_sample_drawn_afresh(m
     irregularity_profile(d)  # inserting d's leaves it alone in the cache
     fresh = irregularity_profile(a.copy())
     assert fresh is not pa and np.array_equal(fresh.values, values)
+
+
+def test_a_shared_profile_gives_its_warning_at_every_run():
+    """A sample too short for its band warns when it is drawn, and again when a later run
+    takes it from the process's cache."""
+    from vtb.simulate import irregularity_profile
+
+    c = vtb.paper_config()
+    c.irregularity = vtb.Irregularity(kind="german_low", wavelength_min=2.0, wavelength_max=400.0, seed=5)
+    for _ in range(2):
+        with pytest.warns(vtb.IrregularityWarning, match="of the variance"):
+            irregularity_profile(c.copy())

@@ -91,8 +91,8 @@ def optimisations(cfg, sw, out: Path, plan: dict, seed: int = 0, optimiser: str 
     sweep ``sw``, ``"cold"`` from a random population, ``"both"`` runs the two (the same seed,
     population and generation cap). Each run keeps a checkpoint in ``out``
     named by its budget and seed, so an interrupted chain resumes and a finished run is reused.
-    Writes ``out/optimisation_history.csv``: per run and generation the evaluations so far and
-    the hypervolume of the feasible front. Returns ``{run: (OptimizationResult, seconds)}``,
+    Writes ``out/optimisation_history.csv``: per run and generation the evaluations so far,
+    the hypervolume of the feasible front and the wall time so far (s, over all sessions). Returns ``{run: (OptimizationResult, seconds)}``,
     the seconds summed over the run's sessions when it resumed (``nan`` when its checkpoint
     predates that record)."""
     if optimiser not in ("warm", "cold", "both"):
@@ -168,7 +168,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     # §4.4: the optimisation (Fig. 7, Table 3, Fig. 8, car body, frequency view).
     runs = optimisations(cfg, sw, out, plan, seed, optimiser, progress, executor)
     for label, (_, seconds) in runs.items():
-        times[f"optimisation ({label})"] = seconds
+        times[f"optimisation ({label}; all its sessions)"] = seconds
     opt = runs["warm" if "warm" in runs else "cold"][0]
     histories = {f"{label} start ({res.moga.n_evals} evaluations)": res.moga.history for label, (res, _) in runs.items()}
     _save(plotting.plot_hypervolume(histories), out, "fig_hypervolume")
@@ -194,7 +194,8 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     summary = dict(  # the chain's headline numbers, for studies built on it (vtb.robust_study)
         table_3_3=rows33, sweep_best=sw.best(), worst_slab_increase=sw.worst_slab_increase(),
         pinned_pinned_frequency=pinned_pinned_frequency(cfg), chosen=next((r for r in table3 if r["choice"] == "best η_r"), None),
-        car=car, evidence={k: v for k, v in evidence.items() if k != "car_bands"}, times=times,
+        car=car, evidence={k: v for k, v in evidence.items() if k != "car_bands"},
+        times={k: None if math.isnan(v) else v for k, v in times.items()},  # null: unknown
     )
     (out / "summary.json").write_text(json.dumps(summary, indent=1, default=float) + "\n")
     return out / "report.md"
@@ -229,7 +230,7 @@ def _optimiser_text(runs: dict, plan: dict) -> list:
                  f"{m.n_gen} generations, {m.n_evals} evaluations ({m.message}), {took}; hypervolume {m.history[-1].hypervolume:.6g} (m/s²)².")
     why = (f"the {DEFAULT_OPTIMISER} start is vtb's default (`vtb.reproduce.DEFAULT_OPTIMISER`), chosen by the median final hypervolume of "
            "each start over five seeds, each run with this stop (docs/optimiser-choice/report.md in vtb's repository)")
-    L.append(f"* Why this start: {why}." if set(runs) == {DEFAULT_OPTIMISER} else f"* The start was chosen with `--optimiser`; {why}.")
+    L.append(f"* Why this start: {why}." if set(runs) == {DEFAULT_OPTIMISER} else f"* The start was chosen by the caller (`--optimiser`); {why}.")
     if len(runs) == 2 and runs["cold"][0].moga.history[-1].hypervolume > 0:
         w, c = runs["warm"][0].moga, runs["cold"][0].moga
         ratio = w.history[-1].hypervolume / c.history[-1].hypervolume
@@ -301,9 +302,10 @@ def _report(out: Path, quick, cfg, rows33, sweep_text, runs, table3, car, times,
         L += _frequency_text(bands)
     L += _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick)
     L += ["All figures are also written as PDF (vector) beside the PNG.", ""]
-    L += ["## Run times", "", "| step | seconds |", "|---|---|"] + [
+    L += ["## Run times", "", "Wall time of each step in this session; an optimisation's sums every session of its run (a finished run reused here "
+          "cost nothing now).", "", "| step | seconds |", "|---|---|"] + [
         f"| {k} | " + ("unknown (its checkpoint predates the record of run time)" if math.isnan(v) else f"{v:.1f}") + " |" for k, v in times.items()]
-    L += [f"| total | {sum(v for v in times.values() if not math.isnan(v)):.1f} |", ""]
+    L += [f"| total of the rows | {sum(v for v in times.values() if not math.isnan(v)):.1f} |", ""]
     (out / "report.md").write_text("\n".join(L) + "\n")
 
 

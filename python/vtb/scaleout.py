@@ -32,6 +32,8 @@ import os
 from concurrent.futures import Executor, as_completed
 from typing import Callable, Iterator, Optional, Sequence
 
+import numpy as np
+
 from . import _core
 from .config import Config
 from .errors import SolverError, config_error
@@ -65,17 +67,21 @@ def dask_environment() -> dict:
 @contextlib.contextmanager
 def local_cluster(n_workers: Optional[int] = None, *, preload: Optional[Config] = None) -> Iterator[Executor]:
     """A Dask cluster on this machine for a study: ``n_workers`` worker processes (default one
-    per core) of one thread each, with :data:`DASK_SETTINGS`; yields its executor (tasks not
-    hashed by content, which a study's runs never repeat) and closes the cluster after.
-    ``preload``: a configuration whose synthesis reduction every worker loads before the
-    cluster is handed over (else each loads it with its first task)."""
+    per core this process may use) of one thread each, with :data:`DASK_SETTINGS`; yields its
+    executor (tasks not hashed by content, which a study's runs never repeat) and closes the
+    cluster after. ``preload``: a configuration whose synthesis reduction every worker loads
+    before the cluster is handed over (else each loads it with its first task); this process
+    builds it first if the disk cache lacks it, so that the workers only read it."""
     from dask import config as dask_config
     from dask.distributed import Client, LocalCluster
 
-    n = (os.cpu_count() or 1) if n_workers is None else n_workers
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    n = cores if n_workers is None else n_workers
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise config_error("n_workers", n_workers, "must be a whole number of worker processes ≥ 1")
-    with dask_config.set(DASK_SETTINGS), LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+    if preload is not None:
+        _hold_reduction(preload)  # built here, once, not by every worker at the same time
+    with dask_config.set(DASK_SETTINGS), LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
             Client(cluster) as client:
         if preload is not None:
             client.run(_hold_reduction, preload)  # reaches every worker, unlike tasks

@@ -4,9 +4,12 @@ parallel inside the Rust core (all cores, GIL released)."""
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
+import os
 import sys
 import threading
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Optional, Sequence, Union
@@ -98,8 +101,14 @@ class SampledProfile(NamedTuple):
 
 #: Bytes of generated profiles this process keeps (the least recently used go first).
 PROFILE_CACHE_BYTES = 256 * 2**20
-_profiles: OrderedDict = OrderedDict()
+_profiles: OrderedDict = OrderedDict()  # key → (profile, the warnings drawing it gave)
 _profiles_lock = threading.Lock()
+if hasattr(os, "register_at_fork"):  # a child forked while another thread held the lock gets a free one
+    os.register_at_fork(after_in_child=lambda: globals().update(_profiles_lock=threading.Lock()))
+
+
+def _nbytes(profile: "SampledProfile") -> int:
+    return profile.values.nbytes + sum(t.nbytes for t in profile.treads)
 
 
 def irregularity_profile(cfg: Config) -> SampledProfile:
@@ -108,8 +117,9 @@ def irregularity_profile(cfg: Config) -> SampledProfile:
 
     A profile is a function of the irregularity, the stretch the wheels travel, the memory
     budget and the wheels' radii alone, and generating one costs tens of milliseconds: this
-    process keeps the last ones (:data:`PROFILE_CACHE_BYTES`), so the runs of a study on one
-    sample — every design, every generation, every executor task on this worker — share it."""
+    process keeps the last ones (:data:`PROFILE_CACHE_BYTES`; a larger one is not kept), so the
+    runs of a study on one sample — every design, every generation, every executor task on this
+    worker — share it. The warnings drawing it gave are given again at every call."""
     L = _real(getattr(cfg.structure, "length", None))
     if L is None or L <= 0:
         return SampledProfile(0.0, 1.0, np.zeros(0), [])
@@ -121,23 +131,31 @@ def irregularity_profile(cfg: Config) -> SampledProfile:
     except (VtbError, ValueError, TypeError):  # refused later, naming the field
         travel = None
     lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
-    key = (json.dumps(_to_plain(cfg.irregularity), default=repr), lo, hi, budget, tuple(radii))
+    spec = json.dumps(_to_plain(cfg.irregularity), default=repr)  # a measured profile's values too
+    key = (hashlib.sha256(spec.encode()).hexdigest(), lo, hi, budget, tuple(radii))
     with _profiles_lock:
-        if key in _profiles:
+        hit = _profiles.get(key)
+        if hit is not None:
             _profiles.move_to_end(key)
-            return _profiles[key]
-    x0, dx, values, treads = cfg.irregularity.sample(lo - _PROFILE_MARGIN, hi + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
-    if treads and not values.size:
-        values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
-    for a in (values, *treads):
-        a.flags.writeable = False  # shared by every run on this sample
-    profile = SampledProfile(x0, dx, values, treads)
-    with _profiles_lock:
-        _profiles[key] = profile
-        total = sum(p.values.nbytes + sum(t.nbytes for t in p.treads) for p in _profiles.values())
-        while total > PROFILE_CACHE_BYTES and len(_profiles) > 1:
-            _, old = _profiles.popitem(last=False)
-            total -= old.values.nbytes + sum(t.nbytes for t in old.treads)
+    if hit is None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            x0, dx, values, treads = cfg.irregularity.sample(lo - _PROFILE_MARGIN, hi + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
+        if treads and not values.size:
+            values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
+        for a in (values, *treads):
+            a.flags.writeable = False  # shared by every run on this sample
+        hit = (SampledProfile(x0, dx, values, treads), [(w.message, w.category) for w in caught])
+        if _nbytes(hit[0]) <= PROFILE_CACHE_BYTES:
+            with _profiles_lock:
+                _profiles[key] = hit
+                total = sum(_nbytes(p) for p, _ in _profiles.values())
+                while total > PROFILE_CACHE_BYTES:
+                    _, (old, _) = _profiles.popitem(last=False)
+                    total -= _nbytes(old)
+    profile, said = hit
+    for message, category in said:
+        warnings.warn(message, category, stacklevel=3)
     return profile
 
 

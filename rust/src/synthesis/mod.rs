@@ -111,7 +111,12 @@ impl Reduction {
             ("residual", residual.len(), 3 * rail_dofs * (band + 1)),
         ] {
             if len != want {
-                return Err(refuse(name, len, &format!("needs {want} entries")));
+                let what = if name == "psi" {
+                    " (re and im of DOFs × modes)"
+                } else {
+                    ""
+                };
+                return Err(refuse(name, len, &format!("needs {want} entries{what}")));
             }
         }
         if rail_dofs > n_dofs {
@@ -333,7 +338,7 @@ mod tests {
 
     #[test]
     fn a_bad_reduction_names_its_field() {
-        // One mode on two DOFs: (Re λ, weight, psi_re length) and the field refused.
+        // One mode on two DOFs: (Re λ, weight, ψ's length in f64 halves) and the field refused.
         for (lam_re, weight, n_psi, field) in [
             (1.0, 2.0, 4, "reduction.lambda[0]"),
             (-1.0, 1.0, 4, "reduction.weight[0]"),

@@ -41,9 +41,16 @@ impl Reduction {
         residual: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Self> {
         let v = |a: PyReadonlyArray1<'_, f64>| a.as_array().to_vec();
-        // ψ read in place (C order): the core's padded copy is the only other one.
+        // ψ read in place when in C order (the core's padded copy is then the only other one);
+        // any other layout is copied in C order first.
         let n_dofs = psi.shape()[0];
-        let psi: &[f64] = bytemuck::cast_slice(psi.as_slice()?);
+        let owned: Vec<f64>;
+        let psi: &[f64] = if psi.is_c_contiguous() {
+            bytemuck::cast_slice(psi.as_slice()?)
+        } else {
+            owned = psi.as_array().iter().flat_map(|z| [z.re, z.im]).collect();
+            &owned
+        };
         vtb::synthesis::Reduction::new(
             n_dofs,
             v(lambda_re),
