@@ -10,7 +10,8 @@ mod common;
 
 use std::time::Instant;
 use vtb::config::{Config, DamperGroup};
-use vtb::{BatchOptions, Job, Record, presets, run_batch, simulate};
+use vtb::library::presets;
+use vtb::{BatchOptions, Job, Record, run_batch, simulate};
 
 fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> Vec<Job> {
     // The article's grid (b_t, k_t, c_t), strided so that the 16 cases spread over it.
@@ -27,7 +28,7 @@ fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> 
                 inertance: b,
                 stiffness: k,
                 damping: c,
-                kind: vtb::dampers::DamperKind::Tid,
+                kind: vtb::model::dampers::DamperKind::Tid,
                 count: Some(10),
                 x0: Some(77.12),
                 spacing: Some(0.64),

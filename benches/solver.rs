@@ -11,7 +11,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 mod common;
 
 use common::paper_profile;
-use vtb::{Model, Profile, presets, simulate::Simulation};
+use vtb::engine::newmark::Simulation;
+use vtb::library::presets;
+use vtb::{Model, Profile};
 
 /// Unknowns, nonzeros of the stepping matrix A = 2M + ΔtC + Δt²K/2 and of its LDLᵀ factor,
 /// and the half-bandwidth of A in the mesh's natural (by position) numbering.
@@ -28,7 +30,7 @@ fn print_factor_size(cfg: &vtb::config::Config) {
     // Position of every unknown: its node's x (finite elements).
     let mut x = vec![0.0; a.n];
     for l in &st.layers {
-        if let vtb::basis::LayerBasis::Fem(mesh) = &l.basis {
+        if let vtb::model::basis::LayerBasis::Fem(mesh) = &l.basis {
             for (i, &xn) in mesh.nodes.iter().enumerate() {
                 x[l.offset + 2 * i] = xn;
                 x[l.offset + 2 * i + 1] = xn;
@@ -72,7 +74,7 @@ fn bench_paper(c: &mut Criterion) {
         inertance: 5.0,
         stiffness: 2e8,
         damping: 1e3,
-        kind: vtb::dampers::DamperKind::Tid,
+        kind: vtb::model::dampers::DamperKind::Tid,
         count: Some(10),
         x0: Some(77.12),
         spacing: Some(0.64),

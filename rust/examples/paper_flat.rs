@@ -1,10 +1,10 @@
 use std::time::Instant;
 fn main() {
-    let cfg = vtb::presets::paper();
+    let cfg = vtb::library::presets::paper();
     let t0 = Instant::now();
     let model = vtb::Model::new(cfg, vtb::Profile::flat()).unwrap();
     let t1 = Instant::now();
-    let sim = vtb::simulate::Simulation::new(&model).unwrap();
+    let sim = vtb::engine::newmark::Simulation::new(&model).unwrap();
     let t2 = Instant::now();
     let res = sim.run(None).unwrap();
     let t3 = Instant::now();

@@ -1,9 +1,19 @@
 //! vtb — vehicle–track–bridge vertical dynamics.
 //!
-//! The core library: beam layers in a modal (Hermite + sine) or finite-element basis,
-//! couplings, vehicle models (Zhai's 10-DOF car, a quarter car), Hertz contact, dampers,
-//! Newmark integration and the complex-modal synthesis of a finite-element structure. It has
-//! no Python types; the `vtb._core` extension module in `rust/bindings` wraps it.
+//! The core library, by trade, each folder importing only from those below it:
+//!
+//! - `config`: the configuration schema (serde, JSON, the fields' own checks): a leaf;
+//! - `linalg`: sparse, banded and dense linear algebra, the lane-wise SIMD kernels;
+//! - `model`: the physics assembled from a configuration — bases, layers, couplings, the
+//!   structure, the FE–SEA correction, dampers, contact, vehicles, the resolved band;
+//! - `outputs`: a run's records, the index catalogue, bands, the band-limiting filter, comfort;
+//! - `check`: the one judge of a configuration — every validation phase, plausibility, the
+//!   memory budget — above the model and the outputs;
+//! - `engine`: the runs — the entrance (batches and lockstep groups), the coupled loop the
+//!   engines share, Newmark and the complex-modal synthesis;
+//! - `library`: the presets and the train library.
+//!
+//! It has no Python types; the `vtb._core` extension module in `rust/bindings` wraps it.
 //!
 //! ```no_run
 //! use vtb::{Config, Profile, simulate};
@@ -17,37 +27,20 @@
 // The numeric kernels walk several arrays with one index; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bands;
-pub mod basis;
-pub mod budget;
-pub mod comfort;
+pub mod check;
 pub mod config;
-pub mod contact;
-pub mod couplings;
-pub mod dampers;
+pub mod engine;
 pub mod error;
-pub mod fesea;
-pub mod filter;
-pub mod indices;
-pub mod integrator;
-pub mod layers;
+pub mod library;
 pub mod linalg;
 pub mod model;
-pub mod plausibility;
-pub mod presets;
-pub mod resolution;
-pub mod results;
-pub mod simulate;
-pub mod structure;
-pub mod synthesis;
-pub mod trains;
-pub mod vehicle;
+pub mod outputs;
 
 pub use config::{Config, Profile};
-pub use error::{Result, VtbError};
-pub use model::Model;
-pub use results::{Record, RunResult};
-pub use simulate::{
+pub use engine::{
     BatchOptions, Control, Job, Sink, run_batch, run_batch_each, run_batch_with, simulate,
     simulate_with,
 };
+pub use error::{Result, VtbError};
+pub use model::Model;
+pub use outputs::{Record, RunResult};

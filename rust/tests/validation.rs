@@ -3,8 +3,8 @@
 
 use faer::Mat;
 use vtb::config::VehicleConfig;
-use vtb::presets::crh3;
-use vtb::vehicle::Vehicle;
+use vtb::library::presets::crh3;
+use vtb::model::vehicle::Vehicle;
 
 /// Eigenfrequencies (Hz) of the car with its wheelsets clamped: body bounce, body pitch,
 /// bogie bounce (×2), bogie pitch (×2), from M⁻¹ᐟ²·K·M⁻¹ᐟ² of the first six DOFs.

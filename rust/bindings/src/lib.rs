@@ -37,9 +37,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::config::plausible_ranges, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::check_plausible, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("DEFAULT_LANES", vtb::simulate::DEFAULT_LANES)?;
-    m.add("SYNTHESIS_LANES", vtb::simulate::SYNTHESIS_LANES)?;
-    m.add("MIN_BINS_PER_BAND", vtb::bands::MIN_BINS_PER_BAND)?;
-    m.add("ACC_REFERENCE", vtb::bands::ACC_REFERENCE)?;
+    m.add("DEFAULT_LANES", vtb::engine::DEFAULT_LANES)?;
+    m.add("SYNTHESIS_LANES", vtb::engine::SYNTHESIS_LANES)?;
+    m.add("MIN_BINS_PER_BAND", vtb::outputs::bands::MIN_BINS_PER_BAND)?;
+    m.add("ACC_REFERENCE", vtb::outputs::bands::ACC_REFERENCE)?;
     Ok(())
 }

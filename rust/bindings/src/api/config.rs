@@ -19,17 +19,17 @@ pub(crate) fn wheel_travel(config_json: &str) -> Option<(f64, f64)> {
     cfg.wheel_travel()
 }
 
-/// The train library (`vtb::trains::library`) as JSON.
+/// The train library (`vtb::library::trains::library`) as JSON.
 #[pyfunction]
 pub(crate) fn train_library() -> String {
-    serde_json::to_string(&vtb::trains::library()).expect("the library serialises")
+    serde_json::to_string(&vtb::library::trains::library()).expect("the library serialises")
 }
 
 /// Each vehicle model's DOF names and wheel count: `{name: (dofs, wheels)}`.
 #[pyfunction]
 pub(crate) fn vehicle_models()
 -> std::collections::BTreeMap<&'static str, (Vec<&'static str>, usize)> {
-    vtb::vehicle::VehicleKind::ALL
+    vtb::model::vehicle::VehicleKind::ALL
         .iter()
         .map(|k| (k.name(), k.layout()))
         .collect()
@@ -38,7 +38,7 @@ pub(crate) fn vehicle_models()
 /// The JSON configuration of a named preset (`"paper"`).
 #[pyfunction]
 pub(crate) fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
-    vtb::presets::by_name(name)
+    vtb::library::presets::by_name(name)
         .map(|c| c.to_json())
         .ok_or_else(|| {
             to_py_err(
@@ -46,7 +46,10 @@ pub(crate) fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
                 VtbError::config(
                     "preset",
                     name,
-                    format!("unknown preset (known: {:?})", vtb::presets::PRESETS),
+                    format!(
+                        "unknown preset (known: {:?})",
+                        vtb::library::presets::PRESETS
+                    ),
                 ),
             )
         })
@@ -86,25 +89,25 @@ pub(crate) fn schema() -> String {
 /// Every index a run of the configuration can report (what `output.indices` may name).
 #[pyfunction]
 pub(crate) fn index_names(py: Python<'_>, config_json: &str) -> PyResult<Vec<String>> {
-    Ok(vtb::results::index_names(&parse_config(py, config_json)?))
+    Ok(vtb::outputs::index_names(&parse_config(py, config_json)?))
 }
 
 /// The key under which the core lets jobs share one model (and run in lockstep): their
 /// configurations equal up to the dampers' parameters.
 #[pyfunction]
 pub(crate) fn model_key(py: Python<'_>, config_json: &str) -> PyResult<String> {
-    Ok(vtb::simulate::model_key(&parse_config(py, config_json)?))
+    Ok(vtb::engine::model_key(&parse_config(py, config_json)?))
 }
 
 /// Refuses a configuration with an implausible value (a likely unit mistake), naming it.
 #[pyfunction]
 pub(crate) fn check_plausible(py: Python<'_>, config_json: &str) -> PyResult<()> {
     let cfg = parse_config(py, config_json)?;
-    vtb::plausibility::check(&cfg).map_err(|e| to_py_err(py, e))
+    vtb::check::plausibility::check(&cfg).map_err(|e| to_py_err(py, e))
 }
 
 /// The plausible ranges of the physical fields: (field, min, max, unit, covers) rows.
 #[pyfunction]
 pub(crate) fn plausible_ranges() -> Vec<(&'static str, f64, f64, &'static str, &'static str)> {
-    vtb::plausibility::table()
+    vtb::check::plausibility::table()
 }

@@ -24,7 +24,7 @@ use vtb::{BatchOptions, Config, Job, Profile, Record, RunResult, VtbError};
 /// A structure's complex-modal reduction held by the core (built by `vtb.synthesis`): the
 /// arrays are converted once and shared by every run that is given it.
 #[pyclass(frozen, module = "vtb._core")]
-pub(crate) struct Reduction(Arc<vtb::synthesis::Reduction>);
+pub(crate) struct Reduction(Arc<vtb::engine::synthesis::Reduction>);
 
 #[pymethods]
 impl Reduction {
@@ -51,7 +51,7 @@ impl Reduction {
             owned = psi.as_array().iter().flat_map(|z| [z.re, z.im]).collect();
             &owned
         };
-        vtb::synthesis::Reduction::new(
+        vtb::engine::synthesis::Reduction::new(
             n_dofs,
             v(lambda_re),
             v(lambda_im),
@@ -92,7 +92,7 @@ impl Reduction {
 
     /// The reduction's static flexibility sᵀK⁻¹s at rail shapes (start, values) pairs.
     fn static_flexibility(&self, start: usize, values: Vec<f64>) -> f64 {
-        let s = vtb::basis::Shape { start, values };
+        let s = vtb::model::basis::Shape { start, values };
         self.0.static_flexibility(&s, &s)
     }
 
@@ -104,8 +104,8 @@ impl Reduction {
         start: usize,
         values: Vec<f64>,
     ) -> PyResult<Option<(f64, f64)>> {
-        let s = vtb::basis::Shape { start, values };
-        vtb::synthesis::Filter::from_moments(self.0.residual_moments(&s), || {
+        let s = vtb::model::basis::Shape { start, values };
+        vtb::engine::synthesis::Filter::from_moments(self.0.residual_moments(&s), || {
             format!("a load at rail DOF {start}")
         })
         .map(|f| f.map(|f| (f.alpha, f.beta)))
@@ -150,7 +150,7 @@ pub(crate) fn simulate<'py>(
 /// as each lockstep group finishes: `on_result(i, item)` for each of its runs (i indexes
 /// `configs`), then `progress(done)`.
 #[pyfunction]
-#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::simulate::DEFAULT_LANES, reduction=None, on_result=None))]
+#[pyo3(signature = (configs, profiles, profile_index, threads=0, progress=None, histories=false, max_lanes=vtb::engine::DEFAULT_LANES, reduction=None, on_result=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn batch<'py>(
     py: Python<'py>,

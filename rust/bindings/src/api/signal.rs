@@ -20,7 +20,7 @@ pub(crate) fn low_pass<'py>(
             VtbError::config("dt", format!("{dt:?}"), "must be a finite number > 0"),
         ));
     }
-    vtb::filter::check("band_limit", band_limit, dt).map_err(|e| to_py_err(py, e))?;
+    vtb::outputs::filter::check("band_limit", band_limit, dt).map_err(|e| to_py_err(py, e))?;
     let x = x.as_slice()?;
     if let Some(v) = x.iter().find(|v| !v.is_finite()) {
         return Err(to_py_err(
@@ -30,6 +30,6 @@ pub(crate) fn low_pass<'py>(
     }
     Ok(PyArray1::from_vec(
         py,
-        vtb::filter::low_pass(x, band_limit, dt),
+        vtb::outputs::filter::low_pass(x, band_limit, dt),
     ))
 }

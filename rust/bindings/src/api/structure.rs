@@ -130,8 +130,9 @@ pub(crate) fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'
         d.set_item(name, m.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?;
     }
     let modes = PyDict::new(py);
-    let col =
-        |f: &dyn Fn(&vtb::fesea::LocalMode) -> f64| fs.modes.iter().map(f).collect::<Vec<f64>>();
+    let col = |f: &dyn Fn(&vtb::model::fesea::LocalMode) -> f64| {
+        fs.modes.iter().map(f).collect::<Vec<f64>>()
+    };
     modes.set_item(
         "index",
         fs.modes.iter().map(|m| m.index as i64).collect::<Vec<_>>(),
@@ -156,7 +157,7 @@ pub(crate) fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'
     Ok(d)
 }
 
-/// The band each layer of a configuration resolves (`vtb::resolution`): a list of dicts
+/// The band each layer of a configuration resolves (`vtb::model::resolution`): a list of dicts
 /// (layer, f_max, basis_f_max, time_f_max in Hz; shortest_wavelength in m), top layer first,
 /// and the top layer's pinned–pinned frequency (Hz, or None).
 #[pyfunction]
@@ -168,7 +169,7 @@ pub(crate) fn resolved_bands<'py>(
     cfg.validate(&Profile::flat())
         .map_err(|e| to_py_err(py, e))?;
     let out = PyList::empty(py);
-    for b in vtb::resolution::resolved_bands(&cfg) {
+    for b in vtb::model::resolution::resolved_bands(&cfg) {
         let d = PyDict::new(py);
         d.set_item("layer", b.layer)?;
         d.set_item("f_max", b.f_max)?;
@@ -177,12 +178,12 @@ pub(crate) fn resolved_bands<'py>(
         d.set_item("shortest_wavelength", b.shortest_wavelength)?;
         out.append(d)?;
     }
-    Ok((out, vtb::resolution::pinned_pinned_frequency(&cfg)))
+    Ok((out, vtb::model::resolution::pinned_pinned_frequency(&cfg)))
 }
 
 /// Half-length (m) along the rail of the Hertz contact patch of a steel wheel of rolling
 /// radius `wheel_radius` (m) on a steel rail head of crown radius `rail_radius` (m) under
-/// `load` (N) (`vtb::contact::patch_half_length`).
+/// `load` (N) (`vtb::model::contact::patch_half_length`).
 #[pyfunction]
 pub(crate) fn patch_half_length(
     py: Python<'_>,
@@ -202,7 +203,7 @@ pub(crate) fn patch_half_length(
             ));
         }
     }
-    Ok(vtb::contact::patch_half_length(
+    Ok(vtb::model::contact::patch_half_length(
         load,
         wheel_radius,
         rail_radius,

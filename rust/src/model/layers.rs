@@ -3,8 +3,8 @@
 //! stiffness, Rayleigh damping and continuous couplings are built, and the element matrices
 //! of finite-element layers.
 
-use crate::basis::{FemBasis, Func, LayerBasis, ModalBasis, Piece, Shape, integrate};
 use crate::config::{LayerConfig, Method};
+use crate::model::basis::{FemBasis, Func, LayerBasis, ModalBasis, Piece, Shape, integrate};
 
 #[derive(Clone, Debug)]
 pub struct Layer {
@@ -363,7 +363,7 @@ mod tests {
             .enumerate()
         {
             let (a, b) = (mesh.nodes[e], mesh.nodes[e + 1]);
-            let h = crate::basis::hermite(a, b - a);
+            let h = crate::model::basis::hermite(a, b - a);
             for i in 0..4 {
                 for j in 0..4 {
                     let kref = ke[4 * i + j];

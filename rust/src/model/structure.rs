@@ -1,14 +1,14 @@
 //! The assembled track–bridge structure: layer DOFs stacked top to bottom, with mass M,
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
-use crate::basis::{LayerBasis, ModalBasis, Shape};
 use crate::config::{Config, CouplingKind, GROUND, Method};
-use crate::couplings::{add_continuous, add_discrete};
-use crate::dampers::{Attachment, DamperParams, stamp};
 use crate::error::Result;
-use crate::fesea::FeSea;
-use crate::layers::{Derivative, Layer, gram_blocks};
 use crate::linalg::sparse::{Assembler, CsrMatrix};
+use crate::model::basis::{LayerBasis, ModalBasis, Shape};
+use crate::model::couplings::{add_continuous, add_discrete};
+use crate::model::dampers::{Attachment, DamperParams, stamp};
+use crate::model::fesea::FeSea;
+use crate::model::layers::{Derivative, Layer, gram_blocks};
 
 #[derive(Clone, Debug)]
 pub struct Structure {
@@ -484,7 +484,7 @@ mod tests {
     /// the point shape times the share, zero off the rail.
     #[test]
     fn wheels_hand_their_force_over_at_the_rail_ends() {
-        let mut cfg = crate::presets::paper();
+        let mut cfg = crate::library::presets::paper();
         cfg.discretisation.method = Method::Modal;
         cfg.solver.edge_ramp = 8.0;
         let st = Structure::build(&cfg).unwrap();

@@ -398,7 +398,7 @@ pub fn table() -> Vec<(&'static str, f64, f64, &'static str, &'static str)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::presets::{paper, paper_converged};
+    use crate::library::presets::{paper, paper_converged};
 
     #[test]
     fn the_presets_are_plausible() {

@@ -145,7 +145,7 @@ impl VehicleModel for ZhaiCar<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vehicle::Vehicle;
+    use crate::model::vehicle::Vehicle;
 
     const N_DOF: usize = 10;
 
@@ -168,7 +168,7 @@ mod tests {
             rails: 2,
             contact_patch: false,
             rail_crown_radius: crate::config::default_rail_crown_radius(),
-            model: crate::vehicle::VehicleKind::Car,
+            model: crate::model::vehicle::VehicleKind::Car,
         }
     }
 

@@ -6,9 +6,9 @@
 //! u_a(x) − u_b(x) = nᵀQ with n = [.., N_a(x), .., −N_b(x), ..], so it adds k·n·nᵀ to K (and
 //! c·n·nᵀ to C); a continuous one adds ∫k·n·nᵀ dx.
 
-use crate::basis::Shape;
-use crate::layers::{Derivative, Layer, gram_blocks_over};
 use crate::linalg::sparse::Assembler;
+use crate::model::basis::Shape;
+use crate::model::layers::{Derivative, Layer, gram_blocks_over};
 
 /// Adds `w`·∫ n·nᵀ dx over `range` of a continuous connection (b = None: to the ground).
 pub fn add_continuous(

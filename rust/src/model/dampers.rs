@@ -16,8 +16,8 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::basis::Shape;
 use crate::linalg::sparse::{Assembler, CsrMatrix};
+use crate::model::basis::Shape;
 
 /// Which element sits in which branch.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default, Hash)]

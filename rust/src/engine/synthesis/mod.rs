@@ -29,8 +29,8 @@ mod step;
 pub use residual::{Filter, FilterStep};
 pub use run::{run, run_lanes};
 
-use crate::basis::Shape;
 use crate::error::{Result, VtbError};
+use crate::model::basis::Shape;
 use kernels::{CVec, RailStepCompliance};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

@@ -1,9 +1,15 @@
-//! The histories of one run and the metrics derived from them.
+//! A run's outputs: the histories it records and the indices derived from them, with the
+//! index catalogue, band levels, the band-limiting filter and ride comfort.
+
+pub mod bands;
+pub mod comfort;
+pub mod filter;
+pub mod indices;
 
 use crate::config::{Config, VehicleConfig};
-use crate::filter::low_pass;
-use crate::indices::{amplitude, rms, settle_time};
-use crate::structure::Structure;
+use crate::model::structure::Structure;
+use crate::outputs::filter::low_pass;
+use crate::outputs::indices::{amplitude, rms, settle_time};
 use std::collections::BTreeMap;
 
 /// The indices of every recorded layer (`{layer}_{suffix}`).
@@ -19,7 +25,7 @@ fn band_suffix(nominal: f64) -> String {
 }
 /// The first car's indices.
 const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
-/// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::comfort`]).
+/// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::outputs::comfort`]).
 const COMFORT: &str = "car_comfort_aw";
 /// The deck acceleration of EN 1990 A2: the bottom layer's, low-passed at `output.deck_band`.
 pub const DECK: &str = "deck_acc_max";
@@ -52,7 +58,7 @@ pub fn index_names(cfg: &Config) -> Vec<String> {
     }
     if !cfg.vehicles.is_empty() {
         out.extend(CAR_INDICES.map(String::from));
-        if 1.0 / cfg.solver.dt >= crate::comfort::MIN_RATE {
+        if 1.0 / cfg.solver.dt >= crate::outputs::comfort::MIN_RATE {
             out.push(COMFORT.to_string());
             out.extend((1..cfg.vehicles.len()).map(car_comfort));
         }
@@ -246,12 +252,12 @@ impl RunResult {
     /// inside it; settle times are still counted from t = 0.
     ///
     /// With a band limit ([`RunResult::band_limit`]) every acceleration index is taken of the
-    /// whole record low-passed at that frequency (zero phase, [`crate::filter`]) before the
+    /// whole record low-passed at that frequency (zero phase, [`crate::outputs::filter`]) before the
     /// window is applied, and each layer's raw peak is kept as `{name}_acc_max_raw`.
     ///
     /// With band levels ([`RunResult::band_levels`]) every layer adds its energy-true
     /// one-third-octave levels `{name}_acc_L{band}` and its equivalent level `{name}_acc_Leq`
-    /// (dB re 1e−6 m/s², [`crate::bands`]) of the raw record over the window.
+    /// (dB re 1e−6 m/s², [`crate::outputs::bands`]) of the raw record over the window.
     ///
     /// With `output.indices` ([`RunResult::indices`]) only those are reported.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
@@ -283,15 +289,16 @@ impl RunResult {
                 .any(|s| self.wants(&format!("{name}_{s}")));
             if !self.band_levels.is_empty() && wanted {
                 let raw = &self.layer_acc(li, 0)[steps.clone()];
-                let powers = crate::bands::band_powers(raw, self.dt, &self.band_levels);
+                let powers = crate::outputs::bands::band_powers(raw, self.dt, &self.band_levels);
                 for (&f, p) in self.band_levels.iter().zip(powers) {
-                    let level = crate::bands::level(p, crate::bands::ACC_REFERENCE);
+                    let level =
+                        crate::outputs::bands::level(p, crate::outputs::bands::ACC_REFERENCE);
                     m.insert(format!("{name}_{}", band_suffix(f)), level);
                 }
                 let ms = rms(raw).powi(2);
                 m.insert(
                     format!("{name}_{LEQ}"),
-                    crate::bands::level(ms, crate::bands::ACC_REFERENCE),
+                    crate::outputs::bands::level(ms, crate::outputs::bands::ACC_REFERENCE),
                 );
             }
         }
@@ -303,10 +310,10 @@ impl RunResult {
             }
             for k in 0..self.n_cars {
                 let name = car_comfort(k);
-                if self.wants(&name) && 1.0 / self.dt >= crate::comfort::MIN_RATE {
+                if self.wants(&name) && 1.0 / self.dt >= crate::outputs::comfort::MIN_RATE {
                     // weighted from the window's start, as vtb.comfort weights a windowed record
                     let raw = &self.vehicle_dof_acc(k, 0)[steps.clone()];
-                    m.insert(name, crate::comfort::weighted_rms(raw, self.dt));
+                    m.insert(name, crate::outputs::comfort::weighted_rms(raw, self.dt));
                 }
             }
         }
@@ -382,7 +389,7 @@ pub fn window_steps(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::presets;
+    use crate::library::presets;
 
     /// A train's indices: every car's comfort, every wheelset's force extremes and the deck's
     /// acceleration; a single layer has no deck.

@@ -15,8 +15,8 @@
 
 use super::Reduction;
 use super::step::Coefficients;
-use crate::basis::Shape;
 use crate::linalg::simd::PARTIAL_SUMS as P;
+use crate::model::basis::Shape;
 
 /// Modes per block: a multiple of P, small enough for a block of every shared array a lane
 /// reads to stay in cache for the next lane.

@@ -10,7 +10,7 @@
 //! SciPy filter the tests hold it to) and the record is filtered once, forwards, from rest.
 //! The warping keeps the digital gain within 1 % of Wk up to 100 Hz at fs ≥ 4 kHz.
 
-use crate::filter::Section;
+use crate::outputs::filter::Section;
 use std::f64::consts::{PI, SQRT_2};
 
 /// (f1, f2, f3, f4, Q4, f5, Q5, f6, Q6) of Wk (Hz), ISO 2631-1 Annex A.
@@ -76,7 +76,7 @@ pub fn weight(a: &[f64], dt: f64) -> Vec<f64> {
 
 /// ISO 2631-1's a_w: the r.m.s. of the Wk-weighted record (m/s²).
 pub fn weighted_rms(a: &[f64], dt: f64) -> f64 {
-    crate::indices::rms(&weight(a, dt))
+    crate::outputs::indices::rms(&weight(a, dt))
 }
 
 #[cfg(test)]

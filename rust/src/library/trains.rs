@@ -3,7 +3,7 @@
 //! vehicles from here, so every number lives in one place.
 
 use crate::config::VehicleConfig;
-use crate::presets::crh3;
+use crate::library::presets::crh3;
 use serde::Serialize;
 
 /// One car of a consist.

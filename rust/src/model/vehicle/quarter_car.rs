@@ -77,7 +77,7 @@ impl VehicleModel for QuarterCar<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vehicle::{Vehicle, VehicleKind};
+    use crate::model::vehicle::{Vehicle, VehicleKind};
 
     fn quarter() -> VehicleConfig {
         let mut v: VehicleConfig = serde_json::from_str(

@@ -7,7 +7,7 @@
 
 use crate::config::{Config, Method};
 use crate::error::{Result, VtbError};
-use crate::results::Record;
+use crate::outputs::Record;
 
 const F64: f64 = 8.0;
 /// Copies of the stepping matrices alive at once (M, C, K, their Newmark combination, its
@@ -40,7 +40,7 @@ pub fn model_bytes(cfg: &Config) -> f64 {
     let matrices = MATRIX_COPIES * (modal * modal + fem * FEM_ROW) * F64;
     let m = cfg.damper_params().len() as f64;
     // Y = A₀⁻¹W (n × m), WᵀY and the lanes' m × m damper matrices.
-    let dampers = (n * m + (2.0 + crate::simulate::MAX_LANES as f64) * m * m) * F64;
+    let dampers = (n * m + (2.0 + crate::engine::MAX_LANES as f64) * m * m) * F64;
     matrices + dampers
 }
 
@@ -147,7 +147,7 @@ pub fn check_histories(cfg: &Config, record: Record, lanes: usize) -> Result<()>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::presets::paper as paper_config;
+    use crate::library::presets::paper as paper_config;
 
     /// A huge damper count, mode count or recorded length is refused with the field that
     /// drives it and the estimated size; the article case fits the default budget easily.

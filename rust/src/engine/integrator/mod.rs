@@ -26,20 +26,20 @@
 //! forces and damper parameters, stored interleaved, and does exactly the operations of a
 //! single run (docs/batches.md).
 //!
-//! Dampers (`Attachment`, crate::dampers) are not factorised with A: a damper's point shape
+//! Dampers (`Attachment`, crate::model::dampers) are not factorised with A: a damper's point shape
 //! vectors would fill the sparse factor. Its internal node is eliminated within the step
 //! (upper branch α_r in series with lower branch α_s, `Branch::step_impedance`), leaving the rank-one
 //! term κ·w·wᵀ on A, w = N_upper − N_lower, κ = α_rα_s/(α_r + α_s), which the Woodbury identity
 //! A⁻¹ = A₀⁻¹ − Y·S⁻¹·Yᵀ (Y = A₀⁻¹W, S = K⁻¹ + WᵀA₀⁻¹W) applies with precomputed Y.
 
-use crate::basis::Shape;
-use crate::dampers::{Attachment, DamperParams};
 use crate::error::Result;
 use crate::linalg::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::linalg::sparse::{CsrMatrix, Ldlt, SymOperator};
+use crate::model::basis::Shape;
+use crate::model::dampers::{Attachment, DamperParams};
 
 /// Port columns processed together: one vehicle's wheels, at most `vehicle::MAX_WHEELS`.
-pub const GW: usize = crate::vehicle::MAX_WHEELS;
+pub const GW: usize = crate::model::vehicle::MAX_WHEELS;
 /// Port vectors with at most this many entries use cached columns of A⁻¹.
 const COLUMN_PORTS_MAX_LEN: usize = 16;
 /// Cached columns kept before unused ones are dropped.
@@ -1058,11 +1058,27 @@ impl<const W: usize> Newmark<W> {
     }
 }
 
+/// a = M⁻¹(F − K·u) for a subsystem at rest.
+pub(crate) fn accelerations(
+    m: &CsrMatrix,
+    k: &CsrMatrix,
+    u: &[f64],
+    f: &[f64],
+) -> Result<Vec<f64>> {
+    let mut ku = vec![0.0; u.len()];
+    k.mul(u, &mut ku);
+    let r: Vec<f64> = f.iter().zip(&ku).map(|(a, b)| a - b).collect();
+    if r.iter().all(|v| *v == 0.0) {
+        return Ok(vec![0.0; u.len()]);
+    }
+    Ok(Ldlt::new(m)?.solve(&r))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dampers::DamperKind;
     use crate::linalg::sparse::Assembler;
+    use crate::model::dampers::DamperKind;
 
     fn scalar(v: f64) -> CsrMatrix {
         let mut a = Assembler::new(1);
@@ -1150,7 +1166,7 @@ mod tests {
                 },
             };
             // Full matrices with the node as DOF n: the damper assembled as a finite element.
-            let [mf, kf, cf] = crate::dampers::stamp(
+            let [mf, kf, cf] = crate::model::dampers::stamp(
                 [&m0, &k0, &c0],
                 n + 1,
                 std::slice::from_ref(&att),

@@ -18,7 +18,7 @@
 //! longest element is at most `element_length`, or L / `fem_elements`).
 
 use crate::config::{Config, CouplingKind, LayerConfig, Method};
-use crate::layers::Layer;
+use crate::model::layers::Layer;
 use std::f64::consts::PI;
 
 /// Relative frequency error that bounds a resolved band.
@@ -203,7 +203,7 @@ pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::presets::{paper, paper_converged, paper_fast};
+    use crate::library::presets::{paper, paper_converged, paper_fast};
 
     #[test]
     fn the_fast_preset_resolves_its_band_limit() {

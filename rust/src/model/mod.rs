@@ -1,9 +1,21 @@
-//! A validated, assembled model: configuration, irregularity, structure matrices and cars.
+//! The physics assembled from a configuration: beam bases and layers, their couplings, the
+//! structure's matrices, the FE–SEA correction of the rail, dampers, the wheel–rail contact,
+//! the vehicle models and the band a discretisation resolves; [`Model`] holds one run's.
+
+pub mod basis;
+pub mod contact;
+pub mod couplings;
+pub mod dampers;
+pub mod fesea;
+pub mod layers;
+pub mod resolution;
+pub mod structure;
+pub mod vehicle;
 
 use crate::config::{Config, Profile};
 use crate::error::Result;
-use crate::structure::Structure;
-use crate::vehicle::Vehicle;
+use crate::model::structure::Structure;
+use crate::model::vehicle::Vehicle;
 
 #[derive(Clone, Debug)]
 pub struct Model {

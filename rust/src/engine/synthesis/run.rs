@@ -26,18 +26,16 @@ use super::kernels::{self, Acc, CVec, RailStepCompliance, Scratch, Update, Wheel
 use super::residual::{Filter, FilterStep};
 use super::step::{C, Coefficients};
 use super::{Gains, Reduction};
-use crate::basis::Shape;
 use crate::config::InitialState;
-use crate::contact::{ContactSolver, patch_half_length};
-use crate::dampers::{Branch, BranchState};
+use crate::engine::coupled::{CarRun, Mover, finish, note_contact, static_wheel_loads};
+use crate::engine::integrator::GW;
+use crate::engine::{CANCEL_POLL, Control, FINITE_POLL, LaneSpec, poll};
 use crate::error::{Result, VtbError};
-use crate::integrator::GW;
 use crate::model::Model;
-use crate::results::{Record, RunResult};
-use crate::simulate::{
-    CANCEL_POLL, CarRun, Control, FINITE_POLL, LaneSpec, Mover, finish, note_contact, poll,
-    static_wheel_loads,
-};
+use crate::model::basis::Shape;
+use crate::model::contact::{ContactSolver, patch_half_length};
+use crate::model::dampers::{Branch, BranchState};
+use crate::outputs::{Record, RunResult};
 use std::sync::Arc;
 
 /// One run on a reduction.
@@ -297,7 +295,7 @@ impl<'a, const W: usize> Run<'a, W> {
             Record::Full => cfg.observation_points(),
             Record::Metrics => cfg.observation_points()[..1].to_vec(),
         };
-        crate::budget::check_histories(cfg, record, W)?;
+        crate::check::budget::check_histories(cfg, record, W)?;
         let project = |s: &Shape| {
             let mut p = CVec::zeros(n);
             kernels::project(red, s, &mut p);

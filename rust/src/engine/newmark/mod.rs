@@ -1,462 +1,20 @@
-//! Coupled runs (track + cars + contact): one at a time, or many jobs that share a model in
-//! lockstep (`Simulation` with W lanes, grouped automatically by `run_batch`).
+//! The structure stepped by Newmark (modal, hybrid FE–SEA or finite elements), coupled with
+//! the cars through the contact; W jobs of one model in lockstep (`Simulation` with W lanes).
 
-use crate::basis::Shape;
-use crate::config::{Config, InitialState, Profile};
-use crate::contact::{ContactSolver, compression, patch_half_length};
-use crate::dampers::DamperParams;
+use super::coupled::{CarRun, Mover, static_wheel_loads};
+use super::integrator::{GW, Newmark, PortBlock, accelerations};
+use super::{Control, LaneSpec};
+use crate::config::{InitialState, Profile};
 use crate::error::{Result, VtbError};
-use crate::fesea::FeSea;
-use crate::integrator::{GW, Newmark, PortBlock};
-use crate::linalg::sparse::{Assembler, CsrMatrix, Ldlt};
+use crate::linalg::sparse::Ldlt;
 use crate::model::Model;
-use crate::results::{ContactLoss, Record, RunResult};
-use crate::synthesis::{self, Reduction};
-use crate::vehicle::Vehicle;
-use rayon::prelude::*;
-use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use crate::model::basis::Shape;
+use crate::model::contact::{ContactSolver, patch_half_length};
+use crate::model::dampers::DamperParams;
+use crate::model::fesea::FeSea;
+use crate::outputs::{Record, RunResult};
 
 mod step;
-
-/// Validates, assembles and integrates one configuration.
-pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&Control>) -> Result<RunResult> {
-    simulate_with(cfg, profile, None, cancel)
-}
-
-/// `simulate` with the structure's reduction, which a configuration with
-/// `discretisation.synthesis_cutoff` needs.
-pub fn simulate_with(
-    cfg: &Config,
-    profile: &Profile,
-    reduction: Option<&Reduction>,
-    cancel: Option<&Control>,
-) -> Result<RunResult> {
-    let model = Model::new(cfg.clone(), profile.clone())?;
-    match engine(cfg, reduction)? {
-        Some(red) => synthesis::run(
-            &model,
-            &LaneSpec::of(cfg, profile),
-            red,
-            Record::Full,
-            cancel,
-        ),
-        None => Simulation::new(&model)?.run(cancel),
-    }
-}
-
-/// The reduction a configuration runs on (`None`: the Newmark engine); a synthesis without
-/// its reduction, or a reduction for a configuration without synthesis, is refused.
-fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&'r Reduction>> {
-    match (cfg.discretisation.synthesis_cutoff, reduction) {
-        (Some(_), Some(r)) => Ok(Some(r)),
-        (None, None) => Ok(None),
-        (Some(fc), None) => Err(VtbError::config(
-            "discretisation.synthesis_cutoff",
-            fc,
-            "the synthesis needs the structure's reduction (vtb.synthesis.reduction(config))",
-        )),
-        (None, Some(_)) => Err(VtbError::config(
-            "discretisation.synthesis_cutoff",
-            "None",
-            "a reduction was given for a configuration that does not ask for the synthesis",
-        )),
-    }
-}
-
-/// What the caller of a run sees and steers while it runs, from another thread: the cancel
-/// flag, polled every [`CANCEL_POLL`] steps, and at each poll the steps done of the run's total
-/// (for a progress bar).
-#[derive(Debug, Default)]
-pub struct Control {
-    cancel: AtomicBool,
-    done: AtomicUsize,
-    total: AtomicUsize,
-}
-
-impl Control {
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Asks the run to stop at its next poll (it ends with [`VtbError::Cancelled`]).
-    pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
-    }
-
-    pub fn cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
-    }
-
-    /// (steps done, steps in all) at the last poll; (0, 0) before the first.
-    pub fn progress(&self) -> (usize, usize) {
-        (
-            self.done.load(Ordering::Relaxed),
-            self.total.load(Ordering::Relaxed),
-        )
-    }
-}
-
-/// A run's poll at `step` of `total`: notes its progress and says whether to stop.
-pub(crate) fn poll(control: Option<&Control>, step: usize, total: usize) -> bool {
-    control.is_some_and(|c| {
-        c.done.store(step, Ordering::Relaxed);
-        c.total.store(total, Ordering::Relaxed);
-        c.cancelled()
-    })
-}
-
-/// Steps between polls of the cancel flag (well under a second on every model).
-pub(crate) const CANCEL_POLL: usize = 64;
-/// Steps between checks that every state is finite.
-pub(crate) const FINITE_POLL: usize = 1024;
-/// The widest lockstep group the engine compiles.
-pub const MAX_LANES: usize = 8;
-/// The default widest group, chosen by measurement (`cargo bench --bench lockstep`, docs).
-pub const DEFAULT_LANES: usize = 4;
-/// The default widest group on a reduction: its lanes share the wheels' modal shapes, a
-/// pass over a few rows of ψ per wheel and step (measured, docs/synthesis.md: 8 lanes on 2
-/// cores run a TID sweep's cases 1.35× faster than 4).
-pub const SYNTHESIS_LANES: usize = 8;
-
-/// One job of a batch: a configuration and its (possibly shared) irregularity profile.
-#[derive(Clone, Debug)]
-pub struct Job {
-    pub config: Config,
-    pub profile: Arc<Profile>,
-}
-
-/// What a lane of a lockstep group owns: its irregularity and its dampers' parameters.
-#[derive(Clone, Debug)]
-pub struct LaneSpec<'a> {
-    pub profile: &'a Profile,
-    /// One per damper of the model (empty without dampers).
-    pub dampers: Vec<DamperParams>,
-}
-
-impl<'a> LaneSpec<'a> {
-    pub fn of(config: &Config, profile: &'a Profile) -> Self {
-        Self {
-            profile,
-            dampers: config.damper_params(),
-        }
-    }
-}
-
-/// Jobs that may share one model: configurations equal up to the dampers' parameters.
-pub fn model_key(cfg: &Config) -> String {
-    let mut c = cfg.clone();
-    for t in c.tids.iter_mut().chain(c.dampers.iter_mut()) {
-        (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);
-    }
-    serde_json::to_string(&c).expect("a config serialises")
-}
-
-/// Lockstep widths for `n` jobs of one model on `threads` threads: powers of two up to
-/// `max_lanes`, as wide as possible while every thread gets a group.
-fn lane_widths(n: usize, threads: usize, max_lanes: usize) -> Vec<usize> {
-    let pow2_floor = |k: usize| 1usize << (usize::BITS - 1 - k.leading_zeros());
-    let w = pow2_floor(
-        n.div_ceil(threads.max(1))
-            .clamp(1, max_lanes.clamp(1, MAX_LANES)),
-    );
-    let mut sizes = vec![w; n / w];
-    let mut left = n % w;
-    while left > 0 {
-        let p = pow2_floor(left);
-        sizes.push(p);
-        left -= p;
-    }
-    sizes
-}
-
-/// How `run_batch` runs its jobs.
-#[derive(Clone, Copy, Debug)]
-pub struct BatchOptions {
-    /// What each result keeps.
-    pub record: Record,
-    /// The widest lockstep group (1, 2, 4 or 8; 1 runs every job alone).
-    pub max_lanes: usize,
-}
-
-impl Default for BatchOptions {
-    fn default() -> Self {
-        Self {
-            record: Record::Metrics,
-            max_lanes: DEFAULT_LANES,
-        }
-    }
-}
-
-/// Runs the jobs on the current rayon pool and returns each job's result or error, in input
-/// order. Jobs whose configurations differ only in the dampers' parameters (the cases of a
-/// sweep, the designs of a generation) or in their irregularity share one assembled model and
-/// run in lockstep groups of up to `opts.max_lanes`; a job gives the same bits in a group as
-/// alone, and a job that fails leaves its group running. `done` counts finished jobs.
-pub fn run_batch(
-    jobs: &[Job],
-    opts: BatchOptions,
-    cancel: Option<&Control>,
-    done: Option<&AtomicUsize>,
-) -> Vec<Result<RunResult>> {
-    run_batch_with(jobs, opts, None, cancel, done)
-}
-
-/// `run_batch` with the structure's reduction for jobs that ask for the synthesis (shared by
-/// all; its lockstep groups share the wheels' modal shapes as well).
-pub fn run_batch_with(
-    jobs: &[Job],
-    opts: BatchOptions,
-    reduction: Option<&Reduction>,
-    cancel: Option<&Control>,
-    done: Option<&AtomicUsize>,
-) -> Vec<Result<RunResult>> {
-    let out: Mutex<Vec<Option<Result<RunResult>>>> =
-        Mutex::new((0..jobs.len()).map(|_| None).collect());
-    run_batch_each(jobs, opts, reduction, cancel, &|finished| {
-        if let Some(d) = done {
-            d.fetch_add(finished.len(), Ordering::Relaxed);
-        }
-        let mut out = out.lock().unwrap_or_else(|e| e.into_inner());
-        for (i, r) in finished {
-            out[i] = Some(r);
-        }
-    });
-    out.into_inner()
-        .unwrap_or_else(|e| e.into_inner())
-        .into_iter()
-        .map(|r| r.expect("every job has a result"))
-        .collect()
-}
-
-/// Receives results as they are known: (job index, result) pairs, a lockstep group's at once.
-pub type Sink<'a> = &'a (dyn Fn(Vec<(usize, Result<RunResult>)>) + Sync);
-
-/// `run_batch_with`, each lockstep group's results handed to `sink` as soon as the group
-/// finishes (jobs refused before running first, together), so that a caller can keep finished
-/// work while the batch goes on. Every job's result reaches the sink exactly once.
-pub fn run_batch_each(
-    jobs: &[Job],
-    opts: BatchOptions,
-    reduction: Option<&Reduction>,
-    cancel: Option<&Control>,
-    sink: Sink,
-) {
-    let record = opts.record;
-    let mut refused = Vec::new();
-    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, job) in jobs.iter().enumerate() {
-        if let Err(e) = job
-            .config
-            .validate(&job.profile)
-            .and_then(|_| engine(&job.config, reduction).map(|_| ()))
-        {
-            refused.push((i, Err(e)));
-            continue;
-        }
-        let g = *keys.entry(model_key(&job.config)).or_insert_with(|| {
-            groups.push(Vec::new());
-            groups.len() - 1
-        });
-        groups[g].push(i);
-    }
-    if !refused.is_empty() {
-        sink(refused);
-    }
-    let cancelled = || cancel.is_some_and(Control::cancelled);
-    let threads = rayon::current_num_threads();
-    groups.par_iter().for_each(|members| {
-        let first = &jobs[members[0]];
-        let model = if cancelled() {
-            Err(VtbError::Cancelled)
-        } else {
-            Model::build(first.config.clone(), (*first.profile).clone())
-        };
-        let mut chunks = Vec::new();
-        let mut at = 0;
-        for w in lane_widths(members.len(), threads, opts.max_lanes) {
-            chunks.push(&members[at..at + w]);
-            at += w;
-        }
-        chunks.into_par_iter().for_each(|chunk| {
-            let res = match &model {
-                Err(e) => vec![Err(e.clone()); chunk.len()],
-                Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
-            };
-            sink(chunk.iter().copied().zip(res).collect());
-        });
-    });
-}
-
-/// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model (on its
-/// reduction when the jobs ask for the synthesis).
-fn run_lanes(
-    model: &Model,
-    jobs: &[Job],
-    chunk: &[usize],
-    record: Record,
-    reduction: Option<&Reduction>,
-    cancel: Option<&Control>,
-) -> Vec<Result<RunResult>> {
-    let lanes: Vec<LaneSpec> = chunk
-        .iter()
-        .map(|&i| LaneSpec::of(&jobs[i].config, &jobs[i].profile))
-        .collect();
-    fn go<const W: usize>(
-        model: &Model,
-        lanes: &[LaneSpec],
-        record: Record,
-        reduction: Option<&Reduction>,
-        cancel: Option<&Control>,
-    ) -> Vec<Result<RunResult>> {
-        let out = match reduction {
-            Some(red) => synthesis::run_lanes::<W>(model, lanes, red, record, cancel),
-            None => Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)),
-        };
-        out.unwrap_or_else(|e| vec![Err(e); W])
-    }
-    match lanes.len() {
-        1 => go::<1>(model, &lanes, record, reduction, cancel),
-        2 => go::<2>(model, &lanes, record, reduction, cancel),
-        4 => go::<4>(model, &lanes, record, reduction, cancel),
-        8 => go::<8>(model, &lanes, record, reduction, cancel),
-        w => unreachable!("lane width {w}"),
-    }
-}
-
-/// A constant force moving with the common speed.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Mover {
-    pub(crate) layer: usize,
-    pub(crate) x0: f64,
-    pub(crate) magnitude: f64,
-}
-
-impl Mover {
-    /// The moving forces of a configuration.
-    pub(crate) fn all(cfg: &Config) -> Vec<Mover> {
-        cfg.forces
-            .iter()
-            .map(|f| Mover {
-                layer: f
-                    .layer
-                    .as_ref()
-                    .and_then(|l| cfg.layer_index(l))
-                    .unwrap_or(0),
-                x0: f.x0,
-                magnitude: f.magnitude,
-            })
-            .collect()
-    }
-}
-
-/// A car's own Newmark stepper (one lane per job); its contact ports are the wheelset DOFs.
-pub(crate) struct CarRun<const W: usize> {
-    pub(crate) car: Vehicle,
-    pub(crate) nm: Newmark<W>,
-    m: CsrMatrix,
-    k: CsrMatrix,
-    pub(crate) ports: PortBlock<W>,
-    /// Wheelset compliance over one step for unit port forces (constant, the same in every
-    /// lane).
-    pub(crate) compliance: [[f64; GW]; GW],
-    pub(crate) gravity: Vec<f64>,
-    pub(crate) f_prev: Vec<f64>,
-    /// The static state of each lane (`[dof·W + lane]`).
-    pub(crate) z0: Vec<f64>,
-}
-
-impl<const W: usize> CarRun<W> {
-    pub(crate) fn new(car: &Vehicle, dt: f64, g: f64) -> Result<Self> {
-        let nd = car.n_dofs();
-        let dense = |m: &[f64]| {
-            let mut a = Assembler::new(nd);
-            for i in 0..nd {
-                for j in 0..nd {
-                    a.add(i, j, m[i * nd + j]);
-                }
-            }
-            a.finish()
-        };
-        let mut am = Assembler::new(nd);
-        for i in 0..nd {
-            am.add(i, i, car.mass[i]);
-        }
-        let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::<W>::new(&m, &c, &k, dt, &[], 1, None, &[])?;
-        for i in 0..nd {
-            nm.observe(&Shape {
-                start: i,
-                values: vec![1.0],
-            });
-        }
-        let mut ports = PortBlock::new(nd);
-        for (w, &d) in car.wheel_dofs.iter().enumerate() {
-            ports.vecs[w] = nm.vector(&Shape {
-                start: d,
-                values: vec![1.0],
-            });
-        }
-        nm.prepare_ports(&mut ports);
-        let compliance = nm.port_compliance(&ports, &ports)[0];
-        let gravity = nm.to_stepper(&car.gravity(g));
-        Ok(Self {
-            car: car.clone(),
-            nm,
-            m,
-            k,
-            ports,
-            compliance,
-            f_prev: gravity.clone(),
-            gravity,
-            z0: vec![0.0; nd * W],
-        })
-    }
-
-    /// Lane `lane` at rest in static equilibrium on wheel contacts whose rail side (rail
-    /// displacement plus irregularity, m) is `rail`, under the static wheel loads `loads` (N).
-    pub(crate) fn set_static(
-        &mut self,
-        lane: usize,
-        rail: &[f64],
-        loads: &[f64],
-        g: f64,
-    ) -> Result<()> {
-        let zw: Vec<f64> = (rail.iter().zip(loads))
-            .map(|(r, &l)| r + compression(self.car.hertz_g, l))
-            .collect();
-        let (_, z) = self.car.static_state(g, &zw);
-        let mut f = self.car.gravity(g);
-        for (&d, l) in self.car.wheel_dofs.iter().zip(loads) {
-            f[d] -= self.car.rails * l;
-        }
-        let av = accelerations(&self.m, &self.k, &z, &f)?;
-        let nd = z.len();
-        self.nm
-            .set_state(lane, &z, &vec![0.0; nd], &av, &self.k, &self.m);
-        for i in 0..nd {
-            self.z0[i * W + lane] = z[i];
-        }
-        Ok(())
-    }
-
-    /// Gravity minus rails·P on the wheelsets (stepper coordinates) into `f_prev`.
-    pub(crate) fn set_force(&mut self, p: &[[f64; GW]; W]) {
-        self.f_prev.clone_from(&self.gravity);
-        for (lane, pl) in p.iter().enumerate() {
-            for w in 0..self.car.n_wheels() {
-                self.ports.vecs[w].add_to_lane::<W>(
-                    &mut self.f_prev,
-                    lane,
-                    -self.car.rails * pl[w],
-                );
-            }
-        }
-    }
-}
 
 /// The FE–SEA force terms of the hybrid model on the rail's cubic DOFs g1..g4 (docs/model.md §6):
 /// a load w at x adds w·a(x) + d/dt(w·b(x)) (`FeSea::load_terms`). The derivative is the
@@ -522,66 +80,8 @@ impl RailCorrection<'_> {
     }
 }
 
-/// Static wheel loads on the modelled rail (N) of every car's wheelsets, from the statics of
-/// each (statically determinate) car.
-pub(crate) fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> Vec<f64> {
-    cars.iter()
-        .flat_map(|c| {
-            let (r, _) = c.car.static_state(g, &vec![0.0; c.car.n_wheels()]);
-            r.into_iter().map(|ri| ri / c.car.rails).collect::<Vec<_>>()
-        })
-        .collect()
-}
-
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Opens and closes the contact-loss periods of one run at t1 from its wheel forces `p`.
-pub(crate) fn note_contact(
-    loss_open: &mut [Option<f64>],
-    p: &[f64],
-    t1: f64,
-    out: &mut Vec<ContactLoss>,
-) {
-    for (wi, open) in loss_open.iter_mut().enumerate() {
-        match (p[wi] == 0.0, *open) {
-            (true, None) => *open = Some(t1),
-            (false, Some(t0)) => {
-                out.push(ContactLoss {
-                    wheel: wi,
-                    t_start: t0,
-                    t_end: Some(t1),
-                });
-                *open = None;
-            }
-            _ => {}
-        }
-    }
-}
-
-/// A finished run: its open contact-loss periods closed at the end, and refused when an
-/// index overflowed.
-pub(crate) fn finish(loss_open: &[Option<f64>], mut r: RunResult) -> Result<RunResult> {
-    for (wi, open) in loss_open.iter().enumerate() {
-        if let Some(t0) = open {
-            r.contact_loss.push(ContactLoss {
-                wheel: wi,
-                t_start: *t0,
-                t_end: None,
-            });
-        }
-    }
-    // A finite state can still give an overflowing index (an acceleration of 1e308 squared
-    // in an r.m.s.): never return it as a result.
-    if let Some((name, v)) = r.metrics().into_iter().find(|(_, v)| !v.is_finite()) {
-        return Err(VtbError::Solver(format!(
-            "the index {name} = {v} is not finite at the end of the run (step {}): an \
-             overflow, most likely from parameters of extreme magnitude",
-            r.n_steps
-        )));
-    }
-    Ok(r)
 }
 
 /// A lane's own data: its irregularity, contact iteration, damper parameters, result, and
@@ -619,7 +119,7 @@ pub struct Simulation<'m, const W: usize = 1> {
     /// Contact force of each wheel on the modelled rail (N), `[lane·n_wheels + wheel]`.
     p: Vec<f64>,
     shape: Shape,
-    scratch: crate::integrator::SVec,
+    scratch: crate::engine::integrator::SVec,
     n_steps: usize,
     correction: Option<RailCorrection<'m>>,
     /// Each lane's free compressions δ_free and contact compliance A this step (`step.rs`).
@@ -658,7 +158,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 .map(|k| st.layers[0].offset + k)
                 .collect()
         };
-        crate::budget::check_histories(cfg, record, W)?;
+        crate::check::budget::check_histories(cfg, record, W)?;
         let (m, c, k) = st.stepping_matrices();
         let mut track = Newmark::<W>::new(
             m,
@@ -1083,28 +583,13 @@ impl<'m, const W: usize> Simulation<'m, W> {
     }
 }
 
-/// a = M⁻¹(F − K·u) for a subsystem at rest.
-pub(crate) fn accelerations(
-    m: &CsrMatrix,
-    k: &CsrMatrix,
-    u: &[f64],
-    f: &[f64],
-) -> Result<Vec<f64>> {
-    let mut ku = vec![0.0; u.len()];
-    k.mul(u, &mut ku);
-    let r: Vec<f64> = f.iter().zip(&ku).map(|(a, b)| a - b).collect();
-    if r.iter().all(|v| *v == 0.0) {
-        return Ok(vec![0.0; u.len()]);
-    }
-    Ok(Ldlt::new(m)?.solve(&r))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::DamperGroup;
-    use crate::dampers::DamperKind;
-    use crate::presets;
+    use crate::config::{Config, DamperGroup};
+    use crate::engine::simulate;
+    use crate::library::presets;
+    use crate::model::dampers::DamperKind;
 
     fn short_with_dampers() -> Config {
         let mut cfg = presets::paper();
@@ -1269,15 +754,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("irregularity.treads[0][7]"), "{e}");
-    }
-
-    #[test]
-    fn lane_widths_keep_every_thread_busy() {
-        assert_eq!(lane_widths(16, 2, 4), vec![4, 4, 4, 4]);
-        assert_eq!(lane_widths(8, 2, 8), vec![4, 4]);
-        assert_eq!(lane_widths(7, 1, 8), vec![4, 2, 1]);
-        assert_eq!(lane_widths(3, 2, 4), vec![2, 1]);
-        assert_eq!(lane_widths(1, 8, 4), vec![1]);
-        assert_eq!(lane_widths(21, 1, 8), vec![8, 8, 4, 1]);
     }
 }

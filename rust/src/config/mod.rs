@@ -3,8 +3,8 @@
 //!
 //! Units are SI throughout (m, s, kg, N, Pa). Displacements are positive downward.
 
-use crate::dampers::{DamperKind, DamperParams};
 use crate::error::{Result, VtbError};
+use crate::model::dampers::{DamperKind, DamperParams};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -306,7 +306,7 @@ pub struct VehicleConfig {
     /// sprung mass `m_c` on `k_p` ∥ `c_p` over one wheel `m_w`; the bogie and pitch fields 0).
     /// Every vehicle of a run is of the same model.
     #[serde(default)]
-    pub model: crate::vehicle::VehicleKind,
+    pub model: crate::model::vehicle::VehicleKind,
 }
 
 fn default_rails() -> usize {
@@ -835,8 +835,8 @@ impl Config {
             Some(names) => (0..layers.len())
                 .filter(|&li| {
                     names.iter().any(|n| {
-                        crate::results::layer_of_index(n, &layers[li].name)
-                            || (n == crate::results::DECK && li + 1 == layers.len())
+                        crate::outputs::layer_of_index(n, &layers[li].name)
+                            || (n == crate::outputs::DECK && li + 1 == layers.len())
                     })
                 })
                 .collect(),
@@ -904,7 +904,7 @@ impl Config {
     /// sub-configuration checks its own fields (`validate(&self, path)`); the phases here add
     /// what relates one part to another: names, positions on layers, the method, the run.
     pub fn validate(&self, profile: &Profile) -> Result<()> {
-        crate::plausibility::check(self)?;
+        crate::check::plausibility::check(self)?;
         let length = self.validate_structure()?;
         self.validate_discretisation()?;
         let (dt, travel) = self.validate_run()?;
@@ -913,7 +913,7 @@ impl Config {
         self.validate_profile(profile)?;
         self.validate_treads(profile)?;
         self.validate_dampers(length)?;
-        crate::budget::check_model(self)
+        crate::check::budget::check_model(self)
     }
 
     /// Layers (names, meshes, extents, bases) and couplings (layers, positions, ranges);
@@ -1191,16 +1191,16 @@ impl Config {
             }
         }
         if let Some(fc) = self.output.band_limit {
-            crate::filter::check("output.band_limit", fc, dt)?;
+            crate::outputs::filter::check("output.band_limit", fc, dt)?;
         }
-        crate::filter::check("output.deck_band", self.output.deck_band, dt)?;
-        let steps = crate::results::window_steps(self.output.window, dt, self.n_steps());
+        crate::outputs::filter::check("output.deck_band", self.output.deck_band, dt)?;
+        let steps = crate::outputs::window_steps(self.output.window, dt, self.n_steps());
         for (i, &f) in self.output.band_levels.iter().enumerate() {
             let n = steps.clone().count();
-            crate::bands::check(&format!("output.band_levels[{i}]"), f, dt, n)?;
+            crate::outputs::bands::check(&format!("output.band_levels[{i}]"), f, dt, n)?;
         }
         if let Some(names) = &self.output.indices {
-            let known = crate::results::index_names(self);
+            let known = crate::outputs::index_names(self);
             for (i, n) in names.iter().enumerate() {
                 if !known.contains(n) {
                     return Err(VtbError::config(
@@ -1821,7 +1821,7 @@ mod tests {
     #[test]
     fn a_wheel_crossing_a_rail_end_needs_the_hand_over_set() {
         // The article car started 5 m before the rail: its wheels cross x = 0 at 80 m/s.
-        let mut cfg = crate::presets::paper();
+        let mut cfg = crate::library::presets::paper();
         cfg.vehicles[0].x_front = -5.0;
         assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
         cfg.solver.edge_step = true; // the step, on request (the hybrid takes no ramp)
@@ -1839,7 +1839,7 @@ mod tests {
     #[test]
     fn a_band_limit_must_lie_below_the_nyquist_frequency() {
         // Δt = 5e-5 s: Nyquist 10 kHz.
-        let mut cfg = crate::presets::paper();
+        let mut cfg = crate::library::presets::paper();
         for (fc, ok) in [
             (2000.0, true),
             (9999.0, true),
@@ -1859,13 +1859,16 @@ mod tests {
 
     #[test]
     fn a_contact_patch_needs_a_finite_element_rail() {
-        let mut cfg = crate::presets::paper();
+        let mut cfg = crate::library::presets::paper();
         cfg.vehicles[0].contact_patch = true;
         assert_eq!(
             refused_field(&cfg).as_deref(),
             Some("vehicles[0].contact_patch")
         );
-        assert_eq!(refused_field(&crate::presets::paper_converged()), None);
+        assert_eq!(
+            refused_field(&crate::library::presets::paper_converged()),
+            None
+        );
         cfg.discretisation.method = Method::Fem;
         cfg.vehicles[0].rail_crown_radius = 0.0;
         assert_eq!(
@@ -1876,7 +1879,7 @@ mod tests {
 
     #[test]
     fn irregularity_share_is_a_smooth_ramp_over_the_fade_distance() {
-        let mut cfg = crate::presets::paper();
+        let mut cfg = crate::library::presets::paper();
         cfg.speed = 80.0;
         cfg.solver.fade_in = 2.0;
         let t_full = 2.0 / 80.0;

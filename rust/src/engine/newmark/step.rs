@@ -2,10 +2,12 @@
 //! contact, update, record. `run_lanes` calls them in that order for every step; each phase
 //! works on all lanes of the lockstep group.
 
-use super::{CANCEL_POLL, Control, FINITE_POLL, Simulation, finish, note_contact, poll};
+use super::Simulation;
+use crate::engine::coupled::{finish, note_contact};
+use crate::engine::integrator::GW;
+use crate::engine::{CANCEL_POLL, Control, FINITE_POLL, poll};
 use crate::error::{Result, VtbError};
-use crate::integrator::GW;
-use crate::results::RunResult;
+use crate::outputs::RunResult;
 
 impl<'m, const W: usize> Simulation<'m, W> {
     /// Runs all steps of every lane. The outer error is shared by all lanes (setup, or

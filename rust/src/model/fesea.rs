@@ -39,10 +39,10 @@
 //! ν⟨X⟩ is taken as (Σ_{j∈B} X_j)/|B| (modes counted in the band over its width), so ν and
 //! ⟨·⟩ come from the same modes.
 
-use crate::basis::ModalBasis;
 use crate::config::{Config, CouplingKind, FeSeaCoupling, GROUND};
 use crate::error::{Result, VtbError};
-use crate::layers::Layer;
+use crate::model::basis::ModalBasis;
+use crate::model::layers::Layer;
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -464,8 +464,8 @@ impl FeSea {
 mod tests {
     use super::*;
     use crate::config::Method;
+    use crate::library::presets;
     use crate::linalg::sparse::CsrMatrix;
-    use crate::presets;
 
     fn paper_hybrid(coupling: FeSeaCoupling) -> (Config, Layer) {
         let mut cfg = presets::paper();
@@ -688,16 +688,16 @@ mod tests {
             assert_eq!(piers.lower, GROUND);
             piers.stiffness = k_pier;
             let piers = piers.clone();
-            let hybrid = crate::structure::Structure::build(&cfg).unwrap();
+            let hybrid = crate::model::structure::Structure::build(&cfg).unwrap();
             cfg.discretisation.method = Method::Modal;
             cfg.structure.layers[0].local_modes = 0;
-            let modal = crate::structure::Structure::build(&cfg).unwrap();
+            let modal = crate::model::structure::Structure::build(&cfg).unwrap();
             let l = cfg.structure.length;
             for (g, shape) in [
                 ([1.0, 1.0], &(|_x: f64| 1.0) as &dyn Fn(f64) -> f64),
                 ([0.0, 1.0], &|x| x / l),
             ] {
-                let energy = |st: &crate::structure::Structure| {
+                let energy = |st: &crate::model::structure::Structure| {
                     let mut t = vec![0.0; st.n_dofs];
                     for layer in &st.layers {
                         t[layer.offset] = g[0];
@@ -739,7 +739,7 @@ mod tests {
             ] {
                 let (mut cfg, _) = paper_hybrid(coupling);
                 cfg.discretisation.omega_r = Some(2.0 * PI * f);
-                let st = crate::structure::Structure::build(&cfg).unwrap();
+                let st = crate::model::structure::Structure::build(&cfg).unwrap();
                 assert!(st.fesea.is_some());
                 crate::linalg::sparse::Ldlt::new(&st.k)
                     .unwrap_or_else(|e| panic!("K at {f} Hz: {e}"));

@@ -1,0 +1,258 @@
+//! The engines' entrance: one configuration, or many jobs grouped by the model they share
+//! and run in lockstep groups on the engine each asks for (Newmark, or the synthesis on a
+//! reduction).
+
+use super::newmark::Simulation;
+use super::synthesis::{self, Reduction};
+use super::{Control, DEFAULT_LANES, Job, LaneSpec, MAX_LANES};
+use crate::config::{Config, Profile};
+use crate::error::{Result, VtbError};
+use crate::model::Model;
+use crate::outputs::{Record, RunResult};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Validates, assembles and integrates one configuration.
+pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&Control>) -> Result<RunResult> {
+    simulate_with(cfg, profile, None, cancel)
+}
+
+/// `simulate` with the structure's reduction, which a configuration with
+/// `discretisation.synthesis_cutoff` needs.
+pub fn simulate_with(
+    cfg: &Config,
+    profile: &Profile,
+    reduction: Option<&Reduction>,
+    cancel: Option<&Control>,
+) -> Result<RunResult> {
+    let model = Model::new(cfg.clone(), profile.clone())?;
+    match engine(cfg, reduction)? {
+        Some(red) => synthesis::run(
+            &model,
+            &LaneSpec::of(cfg, profile),
+            red,
+            Record::Full,
+            cancel,
+        ),
+        None => Simulation::new(&model)?.run(cancel),
+    }
+}
+
+/// The reduction a configuration runs on (`None`: the Newmark engine); a synthesis without
+/// its reduction, or a reduction for a configuration without synthesis, is refused.
+fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&'r Reduction>> {
+    match (cfg.discretisation.synthesis_cutoff, reduction) {
+        (Some(_), Some(r)) => Ok(Some(r)),
+        (None, None) => Ok(None),
+        (Some(fc), None) => Err(VtbError::config(
+            "discretisation.synthesis_cutoff",
+            fc,
+            "the synthesis needs the structure's reduction (vtb.synthesis.reduction(config))",
+        )),
+        (None, Some(_)) => Err(VtbError::config(
+            "discretisation.synthesis_cutoff",
+            "None",
+            "a reduction was given for a configuration that does not ask for the synthesis",
+        )),
+    }
+}
+
+/// Jobs that may share one model: configurations equal up to the dampers' parameters.
+pub fn model_key(cfg: &Config) -> String {
+    let mut c = cfg.clone();
+    for t in c.tids.iter_mut().chain(c.dampers.iter_mut()) {
+        (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);
+    }
+    serde_json::to_string(&c).expect("a config serialises")
+}
+
+/// Lockstep widths for `n` jobs of one model on `threads` threads: powers of two up to
+/// `max_lanes`, as wide as possible while every thread gets a group.
+fn lane_widths(n: usize, threads: usize, max_lanes: usize) -> Vec<usize> {
+    let pow2_floor = |k: usize| 1usize << (usize::BITS - 1 - k.leading_zeros());
+    let w = pow2_floor(
+        n.div_ceil(threads.max(1))
+            .clamp(1, max_lanes.clamp(1, MAX_LANES)),
+    );
+    let mut sizes = vec![w; n / w];
+    let mut left = n % w;
+    while left > 0 {
+        let p = pow2_floor(left);
+        sizes.push(p);
+        left -= p;
+    }
+    sizes
+}
+
+/// How `run_batch` runs its jobs.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchOptions {
+    /// What each result keeps.
+    pub record: Record,
+    /// The widest lockstep group (1, 2, 4 or 8; 1 runs every job alone).
+    pub max_lanes: usize,
+}
+
+impl Default for BatchOptions {
+    fn default() -> Self {
+        Self {
+            record: Record::Metrics,
+            max_lanes: DEFAULT_LANES,
+        }
+    }
+}
+
+/// Runs the jobs on the current rayon pool and returns each job's result or error, in input
+/// order. Jobs whose configurations differ only in the dampers' parameters (the cases of a
+/// sweep, the designs of a generation) or in their irregularity share one assembled model and
+/// run in lockstep groups of up to `opts.max_lanes`; a job gives the same bits in a group as
+/// alone, and a job that fails leaves its group running. `done` counts finished jobs.
+pub fn run_batch(
+    jobs: &[Job],
+    opts: BatchOptions,
+    cancel: Option<&Control>,
+    done: Option<&AtomicUsize>,
+) -> Vec<Result<RunResult>> {
+    run_batch_with(jobs, opts, None, cancel, done)
+}
+
+/// `run_batch` with the structure's reduction for jobs that ask for the synthesis (shared by
+/// all; its lockstep groups share the wheels' modal shapes as well).
+pub fn run_batch_with(
+    jobs: &[Job],
+    opts: BatchOptions,
+    reduction: Option<&Reduction>,
+    cancel: Option<&Control>,
+    done: Option<&AtomicUsize>,
+) -> Vec<Result<RunResult>> {
+    let out: Mutex<Vec<Option<Result<RunResult>>>> =
+        Mutex::new((0..jobs.len()).map(|_| None).collect());
+    run_batch_each(jobs, opts, reduction, cancel, &|finished| {
+        if let Some(d) = done {
+            d.fetch_add(finished.len(), Ordering::Relaxed);
+        }
+        let mut out = out.lock().unwrap_or_else(|e| e.into_inner());
+        for (i, r) in finished {
+            out[i] = Some(r);
+        }
+    });
+    out.into_inner()
+        .unwrap_or_else(|e| e.into_inner())
+        .into_iter()
+        .map(|r| r.expect("every job has a result"))
+        .collect()
+}
+
+/// Receives results as they are known: (job index, result) pairs, a lockstep group's at once.
+pub type Sink<'a> = &'a (dyn Fn(Vec<(usize, Result<RunResult>)>) + Sync);
+
+/// `run_batch_with`, each lockstep group's results handed to `sink` as soon as the group
+/// finishes (jobs refused before running first, together), so that a caller can keep finished
+/// work while the batch goes on. Every job's result reaches the sink exactly once.
+pub fn run_batch_each(
+    jobs: &[Job],
+    opts: BatchOptions,
+    reduction: Option<&Reduction>,
+    cancel: Option<&Control>,
+    sink: Sink,
+) {
+    let record = opts.record;
+    let mut refused = Vec::new();
+    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, job) in jobs.iter().enumerate() {
+        if let Err(e) = job
+            .config
+            .validate(&job.profile)
+            .and_then(|_| engine(&job.config, reduction).map(|_| ()))
+        {
+            refused.push((i, Err(e)));
+            continue;
+        }
+        let g = *keys.entry(model_key(&job.config)).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
+    }
+    if !refused.is_empty() {
+        sink(refused);
+    }
+    let cancelled = || cancel.is_some_and(Control::cancelled);
+    let threads = rayon::current_num_threads();
+    groups.par_iter().for_each(|members| {
+        let first = &jobs[members[0]];
+        let model = if cancelled() {
+            Err(VtbError::Cancelled)
+        } else {
+            Model::build(first.config.clone(), (*first.profile).clone())
+        };
+        let mut chunks = Vec::new();
+        let mut at = 0;
+        for w in lane_widths(members.len(), threads, opts.max_lanes) {
+            chunks.push(&members[at..at + w]);
+            at += w;
+        }
+        chunks.into_par_iter().for_each(|chunk| {
+            let res = match &model {
+                Err(e) => vec![Err(e.clone()); chunk.len()],
+                Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
+                Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
+            };
+            sink(chunk.iter().copied().zip(res).collect());
+        });
+    });
+}
+
+/// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model (on its
+/// reduction when the jobs ask for the synthesis).
+fn run_lanes(
+    model: &Model,
+    jobs: &[Job],
+    chunk: &[usize],
+    record: Record,
+    reduction: Option<&Reduction>,
+    cancel: Option<&Control>,
+) -> Vec<Result<RunResult>> {
+    let lanes: Vec<LaneSpec> = chunk
+        .iter()
+        .map(|&i| LaneSpec::of(&jobs[i].config, &jobs[i].profile))
+        .collect();
+    fn go<const W: usize>(
+        model: &Model,
+        lanes: &[LaneSpec],
+        record: Record,
+        reduction: Option<&Reduction>,
+        cancel: Option<&Control>,
+    ) -> Vec<Result<RunResult>> {
+        let out = match reduction {
+            Some(red) => synthesis::run_lanes::<W>(model, lanes, red, record, cancel),
+            None => Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)),
+        };
+        out.unwrap_or_else(|e| vec![Err(e); W])
+    }
+    match lanes.len() {
+        1 => go::<1>(model, &lanes, record, reduction, cancel),
+        2 => go::<2>(model, &lanes, record, reduction, cancel),
+        4 => go::<4>(model, &lanes, record, reduction, cancel),
+        8 => go::<8>(model, &lanes, record, reduction, cancel),
+        w => unreachable!("lane width {w}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lane_widths_keep_every_thread_busy() {
+        assert_eq!(lane_widths(16, 2, 4), vec![4, 4, 4, 4]);
+        assert_eq!(lane_widths(8, 2, 8), vec![4, 4]);
+        assert_eq!(lane_widths(7, 1, 8), vec![4, 2, 1]);
+        assert_eq!(lane_widths(3, 2, 4), vec![2, 1]);
+        assert_eq!(lane_widths(1, 8, 4), vec![1]);
+        assert_eq!(lane_widths(21, 1, 8), vec![8, 8, 4, 1]);
+    }
+}
