@@ -28,7 +28,7 @@ fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> 
                 inertance: b,
                 stiffness: k,
                 damping: c,
-                kind: vtb::model::dampers::DamperKind::Tid,
+                kind: vtb::config::DamperKind::Tid,
                 count: Some(10),
                 x0: Some(77.12),
                 spacing: Some(0.64),

@@ -11,14 +11,14 @@ use criterion::{Criterion, criterion_group, criterion_main};
 mod common;
 
 use common::paper_profile;
+use vtb::Profile;
 use vtb::engine::newmark::Simulation;
 use vtb::library::presets;
-use vtb::{Model, Profile};
 
 /// Unknowns, nonzeros of the stepping matrix A = 2M + ΔtC + Δt²K/2 and of its LDLᵀ factor,
 /// and the half-bandwidth of A in the mesh's natural (by position) numbering.
 fn print_factor_size(cfg: &vtb::config::Config) {
-    let model = Model::new(cfg.clone(), Profile::flat()).unwrap();
+    let model = vtb::check::validated(cfg.clone(), Profile::flat()).unwrap();
     let st = &model.structure;
     let (m, c, k) = st.stepping_matrices();
     let dt = cfg.solver.dt;
@@ -63,7 +63,7 @@ fn bench_paper(c: &mut Criterion) {
     let mut g = c.benchmark_group("paper_case");
     g.sample_size(10);
     let run = |cfg: &vtb::config::Config| {
-        let model = Model::new(cfg.clone(), profile.clone()).unwrap();
+        let model = vtb::check::validated(cfg.clone(), profile.clone()).unwrap();
         Simulation::new(&model).unwrap().run(None).unwrap()
     };
     let hybrid = presets::paper();
@@ -74,7 +74,7 @@ fn bench_paper(c: &mut Criterion) {
         inertance: 5.0,
         stiffness: 2e8,
         damping: 1e3,
-        kind: vtb::model::dampers::DamperKind::Tid,
+        kind: vtb::config::DamperKind::Tid,
         count: Some(10),
         x0: Some(77.12),
         spacing: Some(0.64),
@@ -86,7 +86,7 @@ fn bench_paper(c: &mut Criterion) {
     let mut modal = presets::paper();
     modal.discretisation.method = vtb::config::Method::Modal;
     g.bench_function("modal_full_run", |b| b.iter(|| run(&modal)));
-    let model = Model::new(modal.clone(), profile.clone()).unwrap();
+    let model = vtb::check::validated(modal.clone(), profile.clone()).unwrap();
     g.bench_function("modal_time_stepping_only", |b| {
         b.iter(|| Simulation::new(&model).unwrap().run(None).unwrap())
     });

@@ -2,7 +2,7 @@ use std::time::Instant;
 fn main() {
     let cfg = vtb::library::presets::paper();
     let t0 = Instant::now();
-    let model = vtb::Model::new(cfg, vtb::Profile::flat()).unwrap();
+    let model = vtb::check::validated(cfg, vtb::Profile::flat()).unwrap();
     let t1 = Instant::now();
     let sim = vtb::engine::newmark::Simulation::new(&model).unwrap();
     let t2 = Instant::now();

@@ -1,5 +1,168 @@
 //! The judge of a configuration: every validation phase, the plausible ranges and the memory
-//! budget, above the model and the outputs it consults.
+//! budget, above the model and the outputs it consults. Each configuration part checks its own
+//! fields (`validate(path)` in crate::config); the phases here relate one part to another:
+//! names, positions on layers, the method, the run, the outputs, the dampers, the budget.
 
 pub mod budget;
+mod dampers;
+mod output;
 pub mod plausibility;
+mod run;
+mod structure;
+
+use crate::config::fields::{
+    MAX_ELEMENTS, MAX_MODES, MAX_STEPS, MAX_TIDS, finite, non_negative, positive, within,
+};
+use crate::config::{
+    Config, CouplingConfig, CouplingKind, DamperGroup, GROUND, LayerConfig, Method, Profile,
+    VehicleConfig,
+};
+use crate::error::{Result, VtbError};
+use crate::model::Model;
+
+pub fn validate(cfg: &Config, profile: &Profile) -> Result<()> {
+    plausibility::check(cfg)?;
+    let length = structure::layers_and_couplings(cfg)?;
+    structure::discretisation(cfg)?;
+    let (dt, travel) = run::timing(cfg)?;
+    run::loads(cfg, travel, profile)?;
+    output::points_and_indices(cfg, dt)?;
+    run::profile(profile)?;
+    run::treads(cfg, profile)?;
+    dampers::groups(cfg, length)?;
+    budget::check_model(cfg)
+}
+
+/// The model of a configuration validated against `profile`.
+pub fn validated(cfg: Config, profile: Profile) -> Result<Model> {
+    validate(&cfg, &profile)?;
+    Model::build(cfg, profile)
+}
+
+/// `x` (field `field`) lies on layer `i`, and not on one of its joints.
+fn on_layer(cfg: &Config, field: &str, x: f64, i: usize) -> Result<f64> {
+    let (a, b) = cfg.extent(i);
+    let layer = &cfg.structure.layers[i];
+    let name = &layer.name;
+    within(field, x, a, b, &format!("layer {name:?}"))?;
+    if layer
+        .joints
+        .iter()
+        .any(|&j| (x - j).abs() <= 1e-9 * (1.0 + j.abs()))
+    {
+        return Err(VtbError::config(
+            field,
+            x,
+            format!("lies on a joint of layer {name:?}: place it on one side"),
+        ));
+    }
+    Ok(x)
+}
+
+/// The layers `path.upper` and `path.lower` name (`None`: the ground), refused when one does
+/// not exist or both are the same (`same`: the reason given).
+fn layer_pair(
+    cfg: &Config,
+    path: &str,
+    upper: &str,
+    lower: &str,
+    same: &str,
+) -> Result<(usize, Option<usize>)> {
+    let u = cfg.layer_index(upper).ok_or_else(|| {
+        VtbError::config(
+            format!("{path}.upper"),
+            format!("{upper:?}"),
+            "no layer of that name",
+        )
+    })?;
+    if lower == GROUND {
+        return Ok((u, None));
+    }
+    let l = cfg.layer_index(lower).ok_or_else(|| {
+        VtbError::config(
+            format!("{path}.lower"),
+            format!("{lower:?}"),
+            "no layer of that name (or \"ground\")",
+        )
+    })?;
+    if l == u {
+        return Err(VtbError::config(
+            format!("{path}.lower"),
+            format!("{lower:?}"),
+            same,
+        ));
+    }
+    Ok((u, Some(l)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn refused_field(cfg: &Config) -> Option<String> {
+        match validate(cfg, &Profile::flat()) {
+            Ok(()) => None,
+            Err(VtbError::Config { field, .. }) => Some(field),
+            Err(e) => panic!("not a ConfigError: {e}"),
+        }
+    }
+
+    #[test]
+    fn a_wheel_crossing_a_rail_end_needs_the_hand_over_set() {
+        // The article car started 5 m before the rail: its wheels cross x = 0 at 80 m/s.
+        let mut cfg = crate::library::presets::paper();
+        cfg.vehicles[0].x_front = -5.0;
+        assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
+        cfg.solver.edge_step = true; // the step, on request (the hybrid takes no ramp)
+        assert_eq!(refused_field(&cfg), None);
+        cfg.solver.edge_ramp = 5.0; // a step and a hand-over at once: refused
+        assert_eq!(refused_field(&cfg).as_deref(), Some("solver.edge_step"));
+        // Wheels that stay off the rail for the whole run need nothing.
+        cfg.solver.edge_step = false;
+        cfg.solver.edge_ramp = 0.0;
+        cfg.vehicles[0].x_front = -500.0;
+        cfg.solver.t_end = Some(0.1);
+        assert_eq!(refused_field(&cfg), None);
+    }
+
+    #[test]
+    fn a_band_limit_must_lie_below_the_nyquist_frequency() {
+        // Δt = 5e-5 s: Nyquist 10 kHz.
+        let mut cfg = crate::library::presets::paper();
+        for (fc, ok) in [
+            (2000.0, true),
+            (9999.0, true),
+            (10000.0, false),
+            (0.0, false),
+            (-1.0, false),
+            (f64::NAN, false),
+        ] {
+            cfg.output.band_limit = Some(fc);
+            let got = refused_field(&cfg);
+            assert_eq!(got.is_none(), ok, "{fc}: {got:?}");
+            if let Some(f) = got {
+                assert_eq!(f, "output.band_limit");
+            }
+        }
+    }
+
+    #[test]
+    fn a_contact_patch_needs_a_finite_element_rail() {
+        let mut cfg = crate::library::presets::paper();
+        cfg.vehicles[0].contact_patch = true;
+        assert_eq!(
+            refused_field(&cfg).as_deref(),
+            Some("vehicles[0].contact_patch")
+        );
+        assert_eq!(
+            refused_field(&crate::library::presets::paper_converged()),
+            None
+        );
+        cfg.discretisation.method = Method::Fem;
+        cfg.vehicles[0].rail_crown_radius = 0.0;
+        assert_eq!(
+            refused_field(&cfg).as_deref(),
+            Some("vehicles[0].rail_crown_radius")
+        );
+    }
+}

@@ -5,6 +5,7 @@
 use super::newmark::Simulation;
 use super::synthesis::{self, Reduction};
 use super::{Control, DEFAULT_LANES, Job, LaneSpec, MAX_LANES};
+use crate::check;
 use crate::config::{Config, Profile};
 use crate::error::{Result, VtbError};
 use crate::model::Model;
@@ -27,7 +28,7 @@ pub fn simulate_with(
     reduction: Option<&Reduction>,
     cancel: Option<&Control>,
 ) -> Result<RunResult> {
-    let model = Model::new(cfg.clone(), profile.clone())?;
+    let model = check::validated(cfg.clone(), profile.clone())?;
     match engine(cfg, reduction)? {
         Some(red) => synthesis::run(
             &model,
@@ -163,9 +164,7 @@ pub fn run_batch_each(
     let mut keys: BTreeMap<String, usize> = BTreeMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, job) in jobs.iter().enumerate() {
-        if let Err(e) = job
-            .config
-            .validate(&job.profile)
+        if let Err(e) = check::validate(&job.config, &job.profile)
             .and_then(|_| engine(&job.config, reduction).map(|_| ()))
         {
             refused.push((i, Err(e)));

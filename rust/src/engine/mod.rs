@@ -20,8 +20,8 @@ pub use batch::{
     simulate_with,
 };
 
+use crate::config::DamperParams;
 use crate::config::{Config, Profile};
-use crate::model::dampers::DamperParams;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 

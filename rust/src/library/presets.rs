@@ -29,7 +29,7 @@ pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
         rails: 2,
         contact_patch: false,
         rail_crown_radius: crate::config::default_rail_crown_radius(),
-        model: crate::model::vehicle::VehicleKind::Car,
+        model: crate::config::VehicleKind::Car,
     }
 }
 

@@ -13,43 +13,9 @@
 //! The time steppers need the node's products with M and K on one side each: the upper
 //! branch carries no inerter and the lower branch no spring (checked by `branches`).
 
-use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
-
+use crate::config::{DamperKind, DamperParams};
 use crate::linalg::sparse::{Assembler, CsrMatrix};
 use crate::model::basis::Shape;
-
-/// Which element sits in which branch.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default, Hash)]
-#[serde(rename_all = "lowercase")]
-pub enum DamperKind {
-    /// Tuned inerter damper: spring ∥ dashpot from the upper layer to the node, inerter from
-    /// the node to the lower layer (or the ground).
-    #[default]
-    Tid,
-    /// Tuned viscous mass damper: spring from the upper layer to the node, inerter ∥ dashpot
-    /// from the node to the lower layer (or the ground).
-    Tvmd,
-    /// Tuned mass damper: a mass (`inertance`) hung from the upper layer by spring ∥ dashpot;
-    /// `lower` must be `"ground"`.
-    Tmd,
-}
-
-impl DamperKind {
-    /// The kind's name in configurations.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Tid => "tid",
-            Self::Tvmd => "tvmd",
-            Self::Tmd => "tmd",
-        }
-    }
-
-    /// Whether the kind needs `lower = "ground"`.
-    pub fn grounded(self) -> bool {
-        matches!(self, Self::Tmd)
-    }
-}
 
 /// A spring k (N/m), a dashpot c (N·s/m) and an inerter b (kg) in parallel.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -73,15 +39,6 @@ impl Branch {
     pub fn step_impedance(&self, dt: f64) -> f64 {
         2.0 * self.inertance + dt * self.damping + 0.5 * dt * dt * self.stiffness
     }
-}
-
-/// The parameters of one damper: what may differ between the lanes of a batch.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DamperParams {
-    pub kind: DamperKind,
-    pub stiffness: f64,
-    pub damping: f64,
-    pub inertance: f64,
 }
 
 impl DamperParams {

@@ -26,13 +26,8 @@ pub struct Model {
 }
 
 impl Model {
-    /// Validates `cfg` against `profile` and assembles the structure.
-    pub fn new(cfg: Config, profile: Profile) -> Result<Self> {
-        cfg.validate(&profile)?;
-        Self::build(cfg, profile)
-    }
-
-    /// Assembles the structure of a configuration already validated against `profile`.
+    /// Assembles the structure of a configuration validated against `profile`
+    /// (`crate::check::validated`).
     pub fn build(cfg: Config, profile: Profile) -> Result<Self> {
         let structure = Structure::build(&cfg)?;
         let cars = cfg.vehicles.iter().map(Vehicle::new).collect();

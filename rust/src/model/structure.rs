@@ -1,12 +1,13 @@
 //! The assembled track–bridge structure: layer DOFs stacked top to bottom, with mass M,
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
+use crate::config::DamperParams;
 use crate::config::{Config, CouplingKind, GROUND, Method};
 use crate::error::Result;
 use crate::linalg::sparse::{Assembler, CsrMatrix};
 use crate::model::basis::{LayerBasis, ModalBasis, Shape};
 use crate::model::couplings::{add_continuous, add_discrete};
-use crate::model::dampers::{Attachment, DamperParams, stamp};
+use crate::model::dampers::{Attachment, stamp};
 use crate::model::fesea::FeSea;
 use crate::model::layers::{Derivative, Layer, gram_blocks};
 

@@ -84,6 +84,21 @@ fn car_comfort(k: usize) -> String {
     }
 }
 
+/// The layers a run's metrics need (`output.indices`; every layer without them), by index.
+pub fn index_layers(cfg: &Config) -> Vec<usize> {
+    let layers = &cfg.structure.layers;
+    match &cfg.output.indices {
+        None => (0..layers.len()).collect(),
+        Some(names) => (0..layers.len())
+            .filter(|&li| {
+                names.iter().any(|n| {
+                    layer_of_index(n, &layers[li].name) || (n == DECK && li + 1 == layers.len())
+                })
+            })
+            .collect(),
+    }
+}
+
 /// Whether `name` is an index of the layer `layer`.
 pub fn layer_of_index(name: &str, layer: &str) -> bool {
     name.strip_prefix(layer)
@@ -121,7 +136,7 @@ impl Record {
     pub fn layers(self, cfg: &Config) -> Vec<usize> {
         match self {
             Record::Full => (0..cfg.structure.layers.len()).collect(),
-            Record::Metrics => cfg.index_layers(),
+            Record::Metrics => index_layers(cfg),
         }
     }
 }
@@ -181,7 +196,9 @@ impl RunResult {
         let (n_cars, vehicle_dofs) = match record {
             Record::Full => (
                 n_cars,
-                cfg.vehicles.first().map_or(0, VehicleConfig::n_dofs),
+                cfg.vehicles
+                    .first()
+                    .map_or(0, |v| crate::model::vehicle::model_of(v).dofs().len()),
             ),
             Record::Metrics => (n_cars, 1),
         };
@@ -415,7 +432,7 @@ mod tests {
                 .any(|k| k == "car2_comfort_aw" || k == "wheel8_force_max")
         );
         cfg.output.indices = Some(vec![DECK.into()]);
-        assert_eq!(cfg.index_layers(), vec![cfg.structure.layers.len() - 1]);
+        assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
         cfg.structure.layers.truncate(1);
         assert!(!index_names(&cfg).iter().any(|k| k == DECK));
     }

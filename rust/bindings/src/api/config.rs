@@ -12,7 +12,7 @@ use vtb::{Config, VtbError};
 pub(crate) fn wheel_travel(config_json: &str) -> Option<(f64, f64)> {
     let cfg = vtb::Config::from_json(config_json).ok()?;
     if !(cfg.solver.dt > 0.0 && cfg.t_end().is_finite())
-        || cfg.t_end() / cfg.solver.dt > vtb::config::MAX_STEPS as f64
+        || cfg.t_end() / cfg.solver.dt > vtb::config::fields::MAX_STEPS as f64
     {
         return None;
     }
@@ -29,9 +29,9 @@ pub(crate) fn train_library() -> String {
 #[pyfunction]
 pub(crate) fn vehicle_models()
 -> std::collections::BTreeMap<&'static str, (Vec<&'static str>, usize)> {
-    vtb::model::vehicle::VehicleKind::ALL
+    vtb::config::VehicleKind::ALL
         .iter()
-        .map(|k| (k.name(), k.layout()))
+        .map(|&k| (k.name(), vtb::model::vehicle::layout(k)))
         .collect()
 }
 
@@ -69,7 +69,7 @@ pub(crate) fn validate(
 ) -> PyResult<()> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile, treads)?;
-    cfg.validate(&p).map_err(|e| to_py_err(py, e))
+    vtb::check::validate(&cfg, &p).map_err(|e| to_py_err(py, e))
 }
 
 /// Parses a JSON configuration against the schema (types, ranges, unknown and missing

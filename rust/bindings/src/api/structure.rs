@@ -19,7 +19,7 @@ type ShapeRows<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
 #[pyfunction]
 pub(crate) fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
-    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let model = vtb::check::validated(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let st = &model.structure;
     let d = PyDict::new(py);
     d.set_item("n", st.n_dofs)?;
@@ -63,7 +63,7 @@ pub(crate) fn shapes<'py>(
     xs: PyReadonlyArray1<'_, f64>,
 ) -> PyResult<ShapeRows<'py>> {
     let cfg = parse_config(py, config_json)?;
-    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let model = vtb::check::validated(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let st = &model.structure;
     if layer >= st.layers.len() {
         return Err(to_py_err(
@@ -105,7 +105,7 @@ pub(crate) fn shapes<'py>(
 #[pyfunction]
 pub(crate) fn fesea<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
-    let model = vtb::Model::new(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
+    let model = vtb::check::validated(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let Some(fs) = &model.structure.fesea else {
         return Err(to_py_err(
             py,
@@ -166,8 +166,7 @@ pub(crate) fn resolved_bands<'py>(
     config_json: &str,
 ) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
     let cfg = parse_config(py, config_json)?;
-    cfg.validate(&Profile::flat())
-        .map_err(|e| to_py_err(py, e))?;
+    vtb::check::validate(&cfg, &Profile::flat()).map_err(|e| to_py_err(py, e))?;
     let out = PyList::empty(py);
     for b in vtb::model::resolution::resolved_bands(&cfg) {
         let d = PyDict::new(py);

@@ -32,11 +32,12 @@
 //! term κ·w·wᵀ on A, w = N_upper − N_lower, κ = α_rα_s/(α_r + α_s), which the Woodbury identity
 //! A⁻¹ = A₀⁻¹ − Y·S⁻¹·Yᵀ (Y = A₀⁻¹W, S = K⁻¹ + WᵀA₀⁻¹W) applies with precomputed Y.
 
+use crate::config::DamperParams;
 use crate::error::Result;
 use crate::linalg::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::linalg::sparse::{CsrMatrix, Ldlt, SymOperator};
 use crate::model::basis::Shape;
-use crate::model::dampers::{Attachment, DamperParams};
+use crate::model::dampers::Attachment;
 
 /// Port columns processed together: one vehicle's wheels, at most `vehicle::MAX_WHEELS`.
 pub const GW: usize = crate::model::vehicle::MAX_WHEELS;
@@ -1077,8 +1078,8 @@ pub(crate) fn accelerations(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::DamperKind;
     use crate::linalg::sparse::Assembler;
-    use crate::model::dampers::DamperKind;
 
     fn scalar(v: f64) -> CsrMatrix {
         let mut a = Assembler::new(1);

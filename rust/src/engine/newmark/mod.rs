@@ -4,13 +4,13 @@
 use super::coupled::{CarRun, Mover, static_wheel_loads};
 use super::integrator::{GW, Newmark, PortBlock, accelerations};
 use super::{Control, LaneSpec};
+use crate::config::DamperParams;
 use crate::config::{InitialState, Profile};
 use crate::error::{Result, VtbError};
 use crate::linalg::sparse::Ldlt;
 use crate::model::Model;
 use crate::model::basis::Shape;
 use crate::model::contact::{ContactSolver, patch_half_length};
-use crate::model::dampers::DamperParams;
 use crate::model::fesea::FeSea;
 use crate::outputs::{Record, RunResult};
 
@@ -586,10 +586,10 @@ impl<'m, const W: usize> Simulation<'m, W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::DamperKind;
     use crate::config::{Config, DamperGroup};
     use crate::engine::simulate;
     use crate::library::presets;
-    use crate::model::dampers::DamperKind;
 
     fn short_with_dampers() -> Config {
         let mut cfg = presets::paper();
@@ -627,7 +627,7 @@ mod tests {
             .iter_mut()
             .skip(1000)
             .for_each(|v| *v = f64::NAN);
-        let model = Model::new(cfg.clone(), smooth.clone()).unwrap();
+        let model = crate::check::validated(cfg.clone(), smooth.clone()).unwrap();
         let param = |k: f64, b: f64| {
             vec![
                 DamperParams {
@@ -733,24 +733,25 @@ mod tests {
             values: vec![0.0; 20_000],
             treads: vec![vec![0.0; 10]],
         };
-        let e = cfg.validate(&p).unwrap_err().to_string();
+        let e = crate::check::validate(&cfg, &p).unwrap_err().to_string();
         assert!(e.contains("irregularity.treads"), "{e}");
         let wheels = cfg.vehicles.len() * 4;
         let mut rows = vec![Vec::new(); wheels];
         rows[1] = vec![0.0; 10];
-        let e = cfg
-            .validate(&Profile {
+        let e = crate::check::validate(
+            &cfg,
+            &Profile {
                 treads: rows,
                 ..p.clone()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("irregularity.treads[1]"), "{e}");
         let mut rows = vec![Vec::new(); wheels];
         rows[0] = vec![0.0; 20_000];
         rows[0][7] = f64::INFINITY;
-        let e = cfg
-            .validate(&Profile { treads: rows, ..p })
+        let e = crate::check::validate(&cfg, &Profile { treads: rows, ..p })
             .unwrap_err()
             .to_string();
         assert!(e.contains("irregularity.treads[0][7]"), "{e}");

@@ -6,7 +6,8 @@
 //! (e.g. F_s1 = K_s(Z_c − l_c·β_c − Z_t1)).
 
 use super::{Dof, Element, VehicleModel};
-use crate::config::{VehicleConfig, non_negative, positive};
+use crate::config::VehicleConfig;
+use crate::config::fields::{non_negative, positive};
 use crate::error::{Result, VtbError};
 
 /// Index of the first wheelset DOF.
@@ -101,17 +102,6 @@ impl VehicleModel for ZhaiCar<'_> {
 
     fn wheel_dofs(&self) -> Vec<usize> {
         (WHEEL0..WHEEL0 + 4).collect()
-    }
-
-    fn wheel_offsets(&self, x_front: f64) -> Vec<f64> {
-        let v = self.0;
-        let xc = x_front - v.l_c - v.l_t;
-        vec![
-            xc + v.l_c + v.l_t,
-            xc + v.l_c - v.l_t,
-            xc - v.l_c + v.l_t,
-            xc - v.l_c - v.l_t,
-        ]
     }
 
     fn validate(&self, p: &str) -> Result<()> {

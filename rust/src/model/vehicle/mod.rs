@@ -1,7 +1,7 @@
 //! Vehicle models (docs/vehicles.md). A model states its degrees of freedom, masses,
 //! suspension elements and wheels ([`VehicleModel`]); the engines see only the assembled linear
 //! system and its wheel ports ([`Vehicle`]). Adding a model is one file here implementing the
-//! trait and one variant of [`VehicleKind`].
+//! trait, one arm of [`model_of`] and one variant of `crate::config::VehicleKind`.
 
 mod car;
 mod quarter_car;
@@ -9,57 +9,31 @@ mod quarter_car;
 pub use car::ZhaiCar;
 pub use quarter_car::QuarterCar;
 
-use crate::config::VehicleConfig;
+use crate::config::{VehicleConfig, VehicleKind};
 use crate::error::Result;
-use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
 
-/// Which vehicle model a `VehicleConfig` describes.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default, Hash)]
-#[serde(rename_all = "snake_case")]
-pub enum VehicleKind {
-    /// Zhai's 10-DOF car: body, two bogies and four wheelsets, bounce and pitch.
-    #[default]
-    Car,
-    /// A quarter car (moving sprung mass): `m_c` on the suspension `k_p`, `c_p` over one wheel
-    /// of mass `m_w`. The bogie and pitch fields are not part of it and must be 0.
-    QuarterCar,
+/// The model a vehicle configuration describes, built from its fields.
+pub fn model_of(v: &VehicleConfig) -> Box<dyn VehicleModel + '_> {
+    match v.model {
+        VehicleKind::Car => Box::new(ZhaiCar(v)),
+        VehicleKind::QuarterCar => Box::new(QuarterCar(v)),
+    }
 }
 
-impl VehicleKind {
-    pub const ALL: [VehicleKind; 2] = [VehicleKind::Car, VehicleKind::QuarterCar];
-
-    /// The model of this kind built from `v`'s fields.
-    pub fn model(self, v: &VehicleConfig) -> Box<dyn VehicleModel + '_> {
-        match self {
-            VehicleKind::Car => Box::new(ZhaiCar(v)),
-            VehicleKind::QuarterCar => Box::new(QuarterCar(v)),
-        }
-    }
-
-    /// The DOF names (state order) and the wheel count of this kind: they do not depend on the
-    /// values, so they are read off a model with every field 0.
-    pub fn layout(self) -> (Vec<&'static str>, usize) {
-        let mut v: VehicleConfig = serde_json::from_value(serde_json::json!({
-            "m_c": 0, "j_c": 0, "m_t": 0, "j_t": 0, "m_w": 0, "k_s": 0, "c_s": 0, "k_p": 0,
-            "c_p": 0, "l_c": 0, "l_t": 0, "wheel_radius": 0, "x_front": 0,
-        }))
-        .expect("a vehicle with every field 0 deserialises");
-        v.model = self;
-        let m = self.model(&v);
-        (
-            m.dofs().iter().map(|d| d.name).collect(),
-            m.wheel_dofs().len(),
-        )
-    }
-
-    /// The name used in configurations.
-    pub fn name(self) -> &'static str {
-        match self {
-            VehicleKind::Car => "car",
-            VehicleKind::QuarterCar => "quarter_car",
-        }
-    }
+/// The DOF names (state order) and the wheel count of a kind: they do not depend on the
+/// values, so they are read off a model with every field 0.
+pub fn layout(kind: VehicleKind) -> (Vec<&'static str>, usize) {
+    let mut v: VehicleConfig = serde_json::from_value(serde_json::json!({
+        "m_c": 0, "j_c": 0, "m_t": 0, "j_t": 0, "m_w": 0, "k_s": 0, "c_s": 0, "k_p": 0,
+        "c_p": 0, "l_c": 0, "l_t": 0, "wheel_radius": 0, "x_front": 0,
+    }))
+    .expect("a vehicle with every field 0 deserialises");
+    v.model = kind;
+    let m = model_of(&v);
+    (
+        m.dofs().iter().map(|d| d.name).collect(),
+        m.wheel_dofs().len(),
+    )
 }
 
 /// One degree of freedom of a vehicle model: z positive downward, rotations positive nose-up.
@@ -88,8 +62,6 @@ pub trait VehicleModel {
     fn elements(&self) -> Vec<Element>;
     /// The DOF of each wheel in contact, front to rear.
     fn wheel_dofs(&self) -> Vec<usize>;
-    /// Wheel positions at t = 0 (m), front to rear, for a leading wheel at `x_front`.
-    fn wheel_offsets(&self, x_front: f64) -> Vec<f64>;
     /// Checks the fields this model reads (and that it leaves the others at 0); `p` is the
     /// vehicle's path in the configuration.
     fn validate(&self, p: &str) -> Result<()>;
@@ -121,7 +93,7 @@ pub struct Vehicle {
 
 impl Vehicle {
     pub fn new(v: &VehicleConfig) -> Self {
-        let model = v.model.model(v);
+        let model = model_of(v);
         let mass = model.masses();
         let n = mass.len();
         let (mut k, mut c) = (vec![0.0; n * n], vec![0.0; n * n]);
@@ -140,7 +112,7 @@ impl Vehicle {
             translational: model.dofs().iter().map(|d| d.translational).collect(),
             wheel_dofs: model.wheel_dofs(),
             hertz_g: v.hertz_constant(),
-            wheel_x0: model.wheel_offsets(v.x_front),
+            wheel_x0: v.wheel_offsets(),
             rails: v.rails as f64,
         }
     }
@@ -207,7 +179,7 @@ mod tests {
     #[test]
     fn every_model_fits_the_port_block() {
         for kind in VehicleKind::ALL {
-            let (dofs, wheels) = kind.layout();
+            let (dofs, wheels) = layout(kind);
             assert!((1..=MAX_WHEELS).contains(&wheels), "{}", kind.name());
             assert_eq!(dofs[0], "Z_c", "the body's bounce comes first");
         }

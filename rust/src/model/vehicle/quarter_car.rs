@@ -4,7 +4,8 @@
 //! the one-wheel vehicle of Frýba's moving-oscillator problems).
 
 use super::{Dof, Element, VehicleModel};
-use crate::config::{VehicleConfig, non_negative, positive};
+use crate::config::VehicleConfig;
+use crate::config::fields::{non_negative, positive};
 use crate::error::{Result, VtbError};
 
 const DOFS: &[Dof] = &[
@@ -42,10 +43,6 @@ impl VehicleModel for QuarterCar<'_> {
         vec![1]
     }
 
-    fn wheel_offsets(&self, x_front: f64) -> Vec<f64> {
-        vec![x_front]
-    }
-
     fn validate(&self, p: &str) -> Result<()> {
         let v = self.0;
         for (name, val) in [("m_c", v.m_c), ("m_w", v.m_w), ("k_p", v.k_p)] {
@@ -77,7 +74,8 @@ impl VehicleModel for QuarterCar<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::vehicle::{Vehicle, VehicleKind};
+    use crate::config::VehicleKind;
+    use crate::model::vehicle::Vehicle;
 
     fn quarter() -> VehicleConfig {
         let mut v: VehicleConfig = serde_json::from_str(
@@ -106,7 +104,9 @@ mod tests {
     fn car_fields_left_set_are_refused_by_name() {
         let mut v = quarter();
         v.l_c = 8.0;
-        let e = v.model.model(&v).validate("vehicles[0]").unwrap_err();
+        let e = super::super::model_of(&v)
+            .validate("vehicles[0]")
+            .unwrap_err();
         assert!(e.to_string().contains("vehicles[0].l_c"), "{e}");
     }
 }

@@ -1,0 +1,45 @@
+//! Damper groups on their layers, and their total count.
+
+use super::*;
+
+/// Every damper group (`damper_groups`), and their total count.
+pub(super) fn groups(cfg: &Config, length: f64) -> Result<()> {
+    let mut total = 0;
+    for (path, g) in cfg.damper_groups() {
+        g.validate(&path, length)?;
+        dampers_on_layers(cfg, &path, g)?;
+        total += g.locations().len();
+    }
+    if total > MAX_TIDS {
+        let (path, g) = cfg.damper_groups().pop().expect("dampers counted");
+        return Err(VtbError::config(
+            if g.positions.is_some() {
+                format!("{path}.positions")
+            } else {
+                format!("{path}.count")
+            },
+            total,
+            format!(
+                "all groups together hold {total} dampers, more than {MAX_TIDS}: their \
+                 coupling is a dense matrix inverted once per run and applied every step"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A group's layers exist, differ, and hold every one of its dampers.
+fn dampers_on_layers(cfg: &Config, path: &str, g: &DamperGroup) -> Result<()> {
+    let same = format!("must differ from {path}.upper");
+    let (upper, lower) = layer_pair(cfg, path, &g.upper, &g.lower, &same)?;
+    let field = match g.positions {
+        Some(_) => format!("{path}.positions"),
+        None => format!("{path}.x0"),
+    };
+    for i in std::iter::once(upper).chain(lower) {
+        for x in g.locations() {
+            on_layer(cfg, &field, x, i)?;
+        }
+    }
+    Ok(())
+}
