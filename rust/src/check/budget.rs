@@ -40,7 +40,7 @@ pub fn model_bytes(cfg: &Config) -> f64 {
     let matrices = MATRIX_COPIES * (modal * modal + fem * FEM_ROW) * F64;
     let m = cfg.damper_params().len() as f64;
     // Y = A₀⁻¹W (n × m), WᵀY and the lanes' m × m damper matrices.
-    let dampers = (n * m + (2.0 + crate::engine::MAX_LANES as f64) * m * m) * F64;
+    let dampers = (n * m + (2.0 + crate::config::fields::MAX_LANES as f64) * m * m) * F64;
     matrices + dampers
 }
 

@@ -73,8 +73,7 @@ pub(crate) const CANCEL_POLL: usize = 64;
 /// Steps between checks that every state is finite.
 pub(crate) const FINITE_POLL: usize = 1024;
 
-/// The widest lockstep group the engine compiles.
-pub const MAX_LANES: usize = 8;
+pub use crate::config::fields::MAX_LANES;
 
 /// The default widest group, chosen by measurement (`cargo bench --bench lockstep`, docs).
 pub const DEFAULT_LANES: usize = 4;

@@ -1,66 +1,14 @@
-//! The coupled time step of the finite-element / modal engine as named phases: loads, ports,
-//! contact, update, record. `run_lanes` calls them in that order for every step; each phase
-//! works on all lanes of the lockstep group.
+//! The Newmark engine's step as named phases, its side of the coupled loop: loads, ports (the
+//! rail's shape vectors at the wheels and their free displacement), the contact compliance,
+//! the update with the wheel forces, and the records. Each phase works on all lanes.
 
-use super::Simulation;
-use crate::engine::coupled::{finish, note_contact};
+use super::NewmarkSide;
+use crate::engine::coupled::{StructureSide, Vehicles};
 use crate::engine::integrator::GW;
-use crate::engine::{CANCEL_POLL, Control, FINITE_POLL, poll};
 use crate::error::{Result, VtbError};
 use crate::outputs::RunResult;
 
-impl<'m, const W: usize> Simulation<'m, W> {
-    /// Runs all steps of every lane. The outer error is shared by all lanes (setup, or
-    /// cancellation: `cancel` is polled every `CANCEL_POLL` steps); the inner ones are each
-    /// lane's own.
-    pub fn run_lanes(mut self, cancel: Option<&Control>) -> Result<Vec<Result<RunResult>>> {
-        self.initial_state()?;
-        let (cfg, st) = (&self.model.cfg, &self.model.structure);
-        let nw = self.p.len() / W;
-        let mut res: Vec<RunResult> = (0..W)
-            .map(|_| {
-                RunResult::new(
-                    cfg,
-                    st,
-                    self.n_steps,
-                    &self.points,
-                    self.cars.len(),
-                    nw,
-                    self.record,
-                )
-            })
-            .collect();
-        self.record_step(&mut res, 0);
-        let dt = cfg.solver.dt;
-        for step in 0..self.n_steps {
-            if step % CANCEL_POLL == 0 && poll(cancel, step, self.n_steps) {
-                return Err(VtbError::Cancelled);
-            }
-            if step % FINITE_POLL == 0 {
-                self.check_finite(step);
-            }
-            if self.lanes.iter().all(|l| l.error.is_some()) {
-                break;
-            }
-            let t1 = (step + 1) as f64 * dt;
-            self.loads(t1);
-            self.ports(t1);
-            self.contact(step, t1);
-            self.update();
-            self.record(&mut res, step, t1);
-        }
-        self.check_finite(self.n_steps);
-        Ok(self
-            .lanes
-            .into_iter()
-            .zip(res)
-            .map(|(lane, r)| match lane.error {
-                Some(e) => Err(e),
-                None => finish(&lane.loss_open, r),
-            })
-            .collect())
-    }
-
+impl<const W: usize> NewmarkSide<'_, W> {
     /// Loads: F_{n+1} of the moving forces and of the FE–SEA correction's rate terms.
     fn loads(&mut self, t1: f64) {
         let v = self.model.cfg.speed;
@@ -79,28 +27,23 @@ impl<'m, const W: usize> Simulation<'m, W> {
         }
     }
 
-    /// Ports: the structure's and the cars' steps begun with the known forces, and the rail's
-    /// shape vectors at the wheels (with the FE–SEA force terms) prepared.
-    fn ports(&mut self, t1: f64) {
+    /// Ports: the structure's step begun with the known forces, and the rail's shape vectors
+    /// at the wheels (with the FE–SEA force terms) prepared; the rail's free displacement at
+    /// every wheel.
+    fn ports(&mut self, t1: f64, veh: &Vehicles<W>) {
         let (st, v) = (&self.model.structure, self.model.cfg.speed);
+        let (nw, wpc) = (veh.n_wheels(), veh.wpc);
         self.track.begin_step(&self.f_prev, &self.f_next);
         if let Some(rc) = self.correction.as_mut() {
-            rc.set_rows(
-                self.cars
-                    .iter()
-                    .flat_map(|c| c.car.wheel_x0.iter().copied()),
-                v,
-                t1,
-            );
+            rc.set_rows(veh.x0.iter().copied(), v, t1);
         }
-        for (ci, c) in self.cars.iter_mut().enumerate() {
+        for ci in 0..veh.cars.len() {
             let ports = &mut self.track_ports[ci];
-            let wpc = self.wpc;
             // Padded to the port width with the last wheel (the padding is not read).
-            let xs: [f64; GW] = std::array::from_fn(|w| c.car.wheel_x0[w.min(wpc - 1)] + v * t1);
+            let xs: [f64; GW] = std::array::from_fn(|w| veh.x0[ci * wpc + w.min(wpc - 1)] + v * t1);
             let terms = self.correction.as_ref().map(|rc| rc.fs.load_terms_at(xs));
             for w in 0..wpc {
-                let a = self.patch[ci * wpc + w];
+                let a = veh.patch[ci * wpc + w];
                 st.wheel_shape_into(xs[w], a, &mut self.wheel_shape);
                 self.track
                     .vector_into(&self.wheel_shape, &mut ports.vecs[w]);
@@ -118,30 +61,68 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 }
             }
             self.track.prepare_ports(ports);
-            c.nm.begin_step(&c.f_prev, &c.gravity);
-        }
-    }
-
-    /// Contact: δ = δ_free − A·P with A = rails·(car compliance) + (rail compliance), and each
-    /// lane's Hertz forces P by Newton.
-    fn contact(&mut self, step: usize, t1: f64) {
-        let (st, cfg) = (&self.model.structure, &self.model.cfg);
-        let v = cfg.speed;
-        let share = cfg.irregularity_share(t1);
-        let nw = self.p.len() / W;
-        let (ncars, wpc) = (self.cars.len(), self.wpc);
-        let (amat, delta_free) = (&mut self.amat, &mut self.delta_free);
-        for ci in 0..ncars {
-            let c = &self.cars[ci];
-            let rail = self.track.free_port_disp(&self.track_ports[ci]);
-            let wheel = c.nm.free_port_disp(&c.ports);
-            for (lane, l) in self.lanes.iter().enumerate() {
+            let rail = self.track.free_port_disp(ports);
+            for (lane, r) in rail.iter().enumerate() {
                 for w in 0..wpc {
-                    let x = c.car.wheel_x0[w] + v * t1;
-                    delta_free[lane * nw + ci * wpc + w] =
-                        wheel[lane][w] - rail[lane][w] - share * l.profile.under(ci * wpc + w, x);
+                    self.rail_free[lane * nw + ci * wpc + w] = r[w];
                 }
             }
+        }
+    }
+}
+
+impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
+    fn start(&mut self, v: &Vehicles<W>, failed: &mut [Option<VtbError>]) -> Result<Vec<f64>> {
+        let f0 = self.initial_load(v);
+        self.f_prev = self.track.to_stepper(&f0);
+        // Each lane's state from its own matrices (its dampers' parameters), as in a single
+        // run; lanes with the model's own parameters share them.
+        let nw = v.n_wheels();
+        let mut rail = vec![0.0; W * nw];
+        let mut own_state = None;
+        for j in 0..W {
+            if let Some(e) = self.setup[j].take() {
+                failed[j] = Some(e);
+                continue;
+            }
+            match self.lane_state(j, &f0, v, &mut own_state) {
+                Ok(r) => rail[j * nw..(j + 1) * nw].copy_from_slice(&r),
+                Err(e) => failed[j] = Some(e),
+            }
+        }
+        Ok(rail)
+    }
+
+    fn begin_step(
+        &mut self,
+        _step: usize,
+        t1: f64,
+        v: &Vehicles<W>,
+        _p: &[f64],
+        _live: &[bool; W],
+    ) -> Option<VtbError> {
+        self.t1 = t1;
+        self.loads(t1);
+        self.ports(t1, v);
+        None
+    }
+
+    fn free_rail(&self, lane: usize, wheel: usize) -> f64 {
+        self.rail_free[lane * (self.rail_free.len() / W) + wheel]
+    }
+
+    /// A = the rail's port compliance plus the cars' own, and each wheel's element
+    /// flexibility.
+    fn compliance(
+        &self,
+        veh: &Vehicles<W>,
+        amat: &mut [f64],
+        car: &dyn Fn(usize, usize) -> Option<f64>,
+    ) {
+        let (st, v) = (&self.model.structure, self.model.cfg.speed);
+        let (ncars, wpc, nw) = (veh.cars.len(), veh.wpc, veh.n_wheels());
+        let t1 = self.t1;
+        for ci in 0..ncars {
             for cj in 0..ncars {
                 let g = self
                     .track
@@ -150,12 +131,8 @@ impl<'m, const W: usize> Simulation<'m, W> {
                     let a = &mut amat[lane * nw * nw..(lane + 1) * nw * nw];
                     for r in 0..wpc {
                         for s in 0..wpc {
-                            let own = if ci == cj {
-                                c.car.rails * c.compliance[r][s]
-                            } else {
-                                0.0
-                            };
-                            a[(ci * wpc + r) * nw + cj * wpc + s] = gl[r][s] + own;
+                            let (wi, vi) = (ci * wpc + r, cj * wpc + s);
+                            a[wi * nw + vi] = gl[r][s] + car(wi, vi).unwrap_or(0.0);
                         }
                     }
                 }
@@ -167,56 +144,32 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 // excitation from it). Wheels are more than an element apart.
                 for w in 0..wpc {
                     let wi = ci * wpc + w;
-                    let f = st.wheel_flexibility(c.car.wheel_x0[w] + v * t1, self.patch[wi]);
+                    let f = st.wheel_flexibility(veh.x0[wi] + v * t1, veh.patch[wi]);
                     for lane in 0..W {
                         amat[lane * nw * nw + wi * nw + wi] += f;
                     }
                 }
             }
         }
-        if nw == 0 {
-            return;
-        }
-        for j in 0..W {
-            let lane = &mut self.lanes[j];
-            if lane.error.is_some() {
-                continue;
-            }
-            let solved = lane.contact.solve(
-                &mut self.p[j * nw..(j + 1) * nw],
-                &self.delta_free[j * nw..(j + 1) * nw],
-                &self.amat[j * nw * nw..(j + 1) * nw * nw],
-                t1,
-                step + 1,
-            );
-            if let Err(e) = solved {
-                self.fail(j, e);
-            }
-        }
     }
 
-    /// Update: the wheel forces applied to the structure and the cars, both steps finished,
-    /// and F_{n+1} (moving forces plus wheel forces) kept as the next step's F_n.
-    fn update(&mut self) {
-        let nw = self.p.len() / W;
-        for ci in 0..self.cars.len() {
-            let p = self.car_forces(ci);
-            let c = &mut self.cars[ci];
-            self.track.add_port_forces(&self.track_ports[ci], &p);
-            let wheel: [[f64; GW]; W] = p.map(|pl| pl.map(|pw| -c.car.rails * pw));
-            c.nm.add_port_forces(&c.ports, &wheel);
-            c.nm.end_step();
-            c.set_force(&p);
+    /// Update: the wheel forces applied to the structure, its step finished, and F_{n+1}
+    /// (moving forces plus wheel forces) kept as the next step's F_n.
+    fn end_step(&mut self, v: &Vehicles<W>, p: &[f64], _live: &[bool; W]) {
+        let (nw, wpc) = (v.n_wheels(), v.wpc);
+        for ci in 0..v.cars.len() {
+            self.track
+                .add_port_forces(&self.track_ports[ci], &v.car_forces(ci, p));
         }
         self.track.end_step();
         std::mem::swap(&mut self.f_prev, &mut self.f_next);
         for (ci, ports) in self.track_ports.iter().enumerate() {
             for lane in 0..W {
-                for w in 0..self.wpc {
+                for w in 0..wpc {
                     ports.force_vec(w).add_to_lane::<W>(
                         &mut self.f_prev,
                         lane,
-                        self.p[lane * nw + ci * self.wpc + w],
+                        p[lane * nw + ci * wpc + w],
                     );
                 }
             }
@@ -226,26 +179,46 @@ impl<'m, const W: usize> Simulation<'m, W> {
                 rc.g_prev[lane] = rc.g_next[lane];
                 for (wi, r) in rc.wheel_r.iter().enumerate() {
                     for g in 0..4 {
-                        rc.g_prev[lane][g] += self.p[lane * nw + wi] * r[g];
+                        rc.g_prev[lane][g] += p[lane * nw + wi] * r[g];
                     }
                 }
             }
         }
     }
 
-    /// Record: contact-loss events and the step's outputs of every lane.
-    fn record(&mut self, res: &mut [RunResult], step: usize, t1: f64) {
-        let nw = self.p.len() / W;
-        for (j, lane) in self.lanes.iter_mut().enumerate() {
-            if lane.error.is_none() {
-                note_contact(
-                    &mut lane.loss_open,
-                    &self.p[j * nw..(j + 1) * nw],
-                    t1,
-                    &mut res[j].contact_loss,
-                );
+    fn record(&mut self, res: &mut [RunResult], step: usize, p: &[f64], live: &[bool; W]) {
+        let no = self.track.n_observed();
+        let nw = self.rail_free.len() / W;
+        for (lane, r) in res.iter_mut().enumerate() {
+            if !live[lane] {
+                continue;
+            }
+            for j in 0..no {
+                let (u, _, a) = self.track.observed(j, lane);
+                r.disp[step * no + j] = u;
+                r.acc[step * no + j] = a;
+            }
+            if let Some(rc) = &self.correction {
+                // Rail points come first: add the local modes' static deflection.
+                let pl = &p[lane * nw..(lane + 1) * nw];
+                for j in 0..rc.obs.len() {
+                    r.disp[step * no + j] += rc.observed_deflection(j, pl);
+                }
             }
         }
-        self.record_step(res, step + 1);
+    }
+
+    fn fail(&mut self, j: usize) {
+        self.track.clear_lane(j);
+        for x in self.f_prev.iter_mut().skip(j).step_by(W) {
+            *x = 0.0;
+        }
+        if let Some(rc) = self.correction.as_mut() {
+            rc.g_prev[j] = [0.0; 4];
+        }
+    }
+
+    fn non_finite(&self, lane: usize) -> Option<&'static str> {
+        (!self.track.lane_finite(lane)).then_some("the structure's displacements")
     }
 }

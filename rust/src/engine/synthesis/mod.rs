@@ -19,9 +19,13 @@
 //! - `residual`: the filter of the residual under a load;
 //! - `step`: complex arithmetic, the exact step's coefficients;
 //! - `kernels`: the two passes over the modes per step (vectorised, lane-generic);
-//! - `run`: the coupled step.
+//! - `run`: the engine's side of the coupled loop, its set-up;
+//! - `passes`: the step's phases on that side;
+//! - `records`: the records made of the readouts, the dampers' port equations.
 
 mod kernels;
+mod passes;
+mod records;
 mod residual;
 mod run;
 mod step;

@@ -1,14 +1,15 @@
-//! What every engine shares: the vehicles (each its own Newmark stepper with the wheelsets as
-//! contact ports), the moving forces, the contact-loss record and a run's finish.
+//! The vehicle side every engine shares: each car its own Newmark stepper with the wheelsets as
+//! contact ports, the wheels' static loads, contact patches and positions, and the moving
+//! forces.
 
-use super::integrator::{GW, Newmark, PortBlock, accelerations};
 use crate::config::Config;
+use crate::engine::integrator::{GW, Newmark, PortBlock, accelerations};
 use crate::error::{Result, VtbError};
 use crate::linalg::sparse::{Assembler, CsrMatrix};
+use crate::model::Model;
 use crate::model::basis::Shape;
-use crate::model::contact::compression;
+use crate::model::contact::{compression, patch_half_length};
 use crate::model::vehicle::Vehicle;
-use crate::outputs::{ContactLoss, RunResult};
 
 /// A constant force moving with the common speed.
 #[derive(Clone, Copy, Debug)]
@@ -152,49 +153,80 @@ pub(crate) fn static_wheel_loads<const W: usize>(cars: &[CarRun<W>], g: f64) -> 
         .collect()
 }
 
-/// Opens and closes the contact-loss periods of one run at t1 from its wheel forces `p`.
-pub(crate) fn note_contact(
-    loss_open: &mut [Option<f64>],
-    p: &[f64],
-    t1: f64,
-    out: &mut Vec<ContactLoss>,
-) {
-    for (wi, open) in loss_open.iter_mut().enumerate() {
-        match (p[wi] == 0.0, *open) {
-            (true, None) => *open = Some(t1),
-            (false, Some(t0)) => {
-                out.push(ContactLoss {
-                    wheel: wi,
-                    t_start: t0,
-                    t_end: Some(t1),
-                });
-                *open = None;
-            }
-            _ => {}
-        }
-    }
+/// The vehicles of a run: their steppers and what the contact needs of every wheel (wheel
+/// `w` of car `ci` is `ci·wpc + w`; one vehicle model per run).
+pub(crate) struct Vehicles<const W: usize> {
+    pub(crate) cars: Vec<CarRun<W>>,
+    /// Wheels per car.
+    pub(crate) wpc: usize,
+    /// Static load of each wheel on the modelled rail (N).
+    pub(crate) loads: Vec<f64>,
+    /// Half-length (m) of each wheel's contact patch, 0 for a point contact.
+    pub(crate) patch: Vec<f64>,
+    /// Hertz constant of each wheel (m/N^(2/3)).
+    pub(crate) hertz: Vec<f64>,
+    /// Position of each wheel at t = 0 (m).
+    pub(crate) x0: Vec<f64>,
 }
 
-/// A finished run: its open contact-loss periods closed at the end, and refused when an
-/// index overflowed.
-pub(crate) fn finish(loss_open: &[Option<f64>], mut r: RunResult) -> Result<RunResult> {
-    for (wi, open) in loss_open.iter().enumerate() {
-        if let Some(t0) = open {
-            r.contact_loss.push(ContactLoss {
-                wheel: wi,
-                t_start: *t0,
-                t_end: None,
-            });
+impl<const W: usize> Vehicles<W> {
+    /// The model's vehicles stepped at `dt`; a wheel that carries no static load is refused.
+    pub(crate) fn new(model: &Model, dt: f64) -> Result<Self> {
+        let cfg = &model.cfg;
+        let g = cfg.solver.gravity;
+        let cars = model
+            .cars
+            .iter()
+            .map(|c| CarRun::<W>::new(c, dt, g))
+            .collect::<Result<Vec<_>>>()?;
+        let wpc = cars.first().map_or(0, |c| c.car.n_wheels());
+        let loads = static_wheel_loads(&cars, g);
+        if let Some((i, l)) = loads.iter().enumerate().find(|(_, l)| !(**l > 0.0)) {
+            return Err(VtbError::config(
+                format!("vehicles[{}]", i / wpc),
+                l,
+                format!("wheel {} carries no static load", i % wpc + 1),
+            ));
         }
+        let patch = loads
+            .iter()
+            .enumerate()
+            .map(|(wi, &load)| {
+                let v = &cfg.vehicles[wi / wpc];
+                if v.contact_patch {
+                    patch_half_length(load, v.wheel_radius, v.rail_crown_radius)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Ok(Self {
+            hertz: cars.iter().flat_map(|c| vec![c.car.hertz_g; wpc]).collect(),
+            x0: cars.iter().flat_map(|c| c.car.wheel_x0.clone()).collect(),
+            cars,
+            wpc,
+            loads,
+            patch,
+        })
     }
-    // A finite state can still give an overflowing index (an acceleration of 1e308 squared
-    // in an r.m.s.): never return it as a result.
-    if let Some((name, v)) = r.metrics().into_iter().find(|(_, v)| !v.is_finite()) {
-        return Err(VtbError::Solver(format!(
-            "the index {name} = {v} is not finite at the end of the run (step {}): an \
-             overflow, most likely from parameters of extreme magnitude",
-            r.n_steps
-        )));
+
+    /// Wheels of the run.
+    pub(crate) fn n_wheels(&self) -> usize {
+        self.loads.len()
     }
-    Ok(r)
+
+    /// The wheel forces of car `ci` per lane from the contact forces `p` (`[lane·nw + wheel]`),
+    /// padded to the port width.
+    pub(crate) fn car_forces(&self, ci: usize, p: &[f64]) -> [[f64; GW]; W] {
+        let (nw, wpc) = (self.n_wheels(), self.wpc);
+        std::array::from_fn(|lane| {
+            std::array::from_fn(|w| {
+                if w < wpc {
+                    p[lane * nw + ci * wpc + w]
+                } else {
+                    0.0
+                }
+            })
+        })
+    }
 }
