@@ -18,7 +18,8 @@ import warnings
 import numpy as np
 
 import vtb
-from vtb import synthesis, track
+from vtb.run import synthesis
+from vtb.analysis import track
 from vtb.machine import describe
 
 warnings.simplefilter("ignore", vtb.ResolutionWarning)

@@ -6,9 +6,9 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pytest
 
-from vtb import moga
+from vtb.optim import minimize as moga
 from vtb.errors import ConfigError
-from vtb.moga import (
+from vtb.optim.minimize import (
     Problem, asf, crowding_distance, hypervolume_2d, igd, igd_plus, knee_point, min_distance_to_ideal,
     minimize, non_dominated_sort,
 )

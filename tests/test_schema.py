@@ -10,8 +10,8 @@ import typing
 import pytest
 
 import vtb
-from vtb import config as C
-from vtb.schema import SCHEMA, description, properties
+from vtb.config import fields as C
+from vtb.config.schema import SCHEMA, description, properties
 
 #: Python class → the core struct it serialises to (the two Rayleigh forms are the variants
 #: of one tagged enum).
@@ -138,7 +138,7 @@ def _is_table(prop):
 @pytest.mark.parametrize("cls,struct", PAIRS, ids=[s for _, s in PAIRS])
 def test_every_field_is_documented_with_its_unit_in_one_place(cls, struct):
     """The core's doc comment is the one description of a field; the Python class's
-    docstring carries it (vtb.schema.documented)."""
+    docstring carries it (vtb.config.schema.documented)."""
     for name, prop in properties(struct).items():
         text = description(struct, name)
         assert text, f"{struct}.{name} has no doc comment"

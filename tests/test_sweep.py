@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import scaleout
-from vtb import studies as studies_mod
-from vtb import tid_sweep as sweep_mod
-from vtb.tid_sweep import COLUMNS, METRICS, SweepResult
+from vtb.run import scaleout
+from vtb.studies import grid as studies_mod
+from vtb.article import tid_sweep as sweep_mod
+from vtb.article.tid_sweep import COLUMNS, METRICS, SweepResult
 
 GRID = dict(b_t=[2.0, 5.0], k_t=[1e8, 2e8], c_t=[1e3])
 
@@ -367,7 +367,7 @@ def test_partial_last_line_is_still_dropped(short, journal_lines, tmp_path, monk
 _HOLDER = """
 import sys, time
 from pathlib import Path
-from vtb.journal import lock
+from vtb.studies.journal import lock
 with lock(Path(sys.argv[1])):
     print("locked", flush=True)
     time.sleep(120)

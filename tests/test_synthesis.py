@@ -12,7 +12,8 @@ import pytest
 import scipy.sparse.linalg as spla
 
 import vtb
-from vtb import synthesis, track
+from vtb.run import synthesis
+from vtb.analysis import track
 
 
 def one_span(cutoff=4000.0):
@@ -249,7 +250,7 @@ def test_the_cache_key_is_the_structures_alone(monkeypatch):
     d.irregularity = vtb.Irregularity(kind="none")
     assert synthesis.cache_key(c) == synthesis.cache_key(d)
     # Nor does a field added to the solver: the key holds no solver at all.
-    from vtb import track
+    from vtb.analysis import track
 
     key, real = synthesis.cache_key(c), track._structure_json
     monkeypatch.setattr(track, "_structure_json", lambda cfg: json.dumps({**json.loads(real(cfg)), "solver": {"new_field": 1.0}}))
@@ -264,7 +265,8 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     """A TID sweep on the fast converged model (one span), Ctrl-C after its first lockstep
     group: the finished cases are journaled, the resume runs only the others, and the result
     equals an uninterrupted sweep's bit for bit."""
-    from vtb import scaleout, tid_sweep
+    from vtb.run import scaleout
+    from vtb.article import tid_sweep
 
     c = one_span()
     c.solver.t_end = 0.02

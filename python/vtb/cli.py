@@ -78,7 +78,7 @@ def check_config_file(path) -> None:
     """``--config`` names a readable file or a shipped example."""
     if path is None:
         return
-    from .presets import examples
+    from .config.presets import examples
 
     p = Path(path)
     if p.is_dir():
@@ -98,11 +98,11 @@ def require_matplotlib(command: str) -> None:
 
 def _load_config(path: str | None):
     """The article's case, a TOML file, or a shipped example by name (``vtb examples``)."""
-    from .presets import example_config, examples, paper_config
+    from .config.presets import example_config, examples, paper_config
 
     if path is None:
         return paper_config()
-    from .config import Config
+    from .config.fields import Config
 
     check_config_file(path)
     if not Path(path).is_file() and path in examples():
@@ -111,7 +111,7 @@ def _load_config(path: str | None):
 
 
 def _print_metrics(metrics: dict, out=None) -> None:
-    from .simulate import metric_unit
+    from .run.simulate import metric_unit
 
     out = out or sys.stdout
     width = max(len(k) for k in metrics)
@@ -139,9 +139,9 @@ def _rounded(cfg) -> str:
 def _describe(cfg, label: str) -> list[str]:
     """What a run is: its model and what it resolves, its excitation, and how its numbers
     relate to the article's published ones (``#`` lines printed before the metrics)."""
-    from .presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config
-    from .reproduce import ARTICLE_33
-    from .resolution import resolved_band
+    from .config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config
+    from .article.reproduce import ARTICLE_33
+    from .config.resolution import resolved_band
 
     d = cfg.discretisation
     rail = cfg.structure.layers[0]
@@ -183,7 +183,7 @@ def cmd_simulate(args) -> int:
     if args.out:
         check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
     cfg = _load_config(args.config)
-    from .simulate import simulate
+    from .run.simulate import simulate
 
     t0 = time.perf_counter()
     res = simulate(cfg)
@@ -200,7 +200,7 @@ def cmd_simulate(args) -> int:
         cfg.to_toml(out / "config.toml")
         if not args.no_plot:
             try:
-                from .plotting import plot_histories
+                from .analysis.plotting import plot_histories
             except ImportError:
                 print("matplotlib is not installed: no plot (pip install 'vtb[plot]')", file=sys.stderr)
             else:
@@ -232,7 +232,7 @@ def study_executor(args):
 def cmd_validate(args) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
-    from .validation import REFERENCE, errors, run_study, write_report
+    from .article.validation import REFERENCE, errors, run_study, write_report
 
     check_out_file(args.out, "--out", args.force)
     with contextlib.ExitStack() as stack:
@@ -254,7 +254,7 @@ def _floats(text: str) -> list:
 
 
 def _tid_config(args):
-    from .presets import paper_config, tids_around
+    from .config.presets import paper_config, tids_around
 
     cfg = _load_config(args.config) if args.config else paper_config(calibrated=args.calibrated)
     if cfg.tids is None:
@@ -263,7 +263,7 @@ def _tid_config(args):
 
 
 def cmd_sweep(args) -> int:
-    from .tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
+    from .article.tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
 
     check_config_file(args.config)
     if Path(args.out).is_dir():
@@ -291,7 +291,7 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_optimize(args) -> int:
-    from .optimize import optimize
+    from .studies.optimize import optimize
 
     check_config_file(args.config)
     if args.out:
@@ -326,7 +326,7 @@ def cmd_optimize(args) -> int:
 
 
 def cmd_examples(args) -> int:
-    from .presets import example_text, examples
+    from .config.presets import example_text, examples
 
     if args.name:
         sys.stdout.write(example_text(args.name))
@@ -342,7 +342,7 @@ def cmd_examples(args) -> int:
 
 
 def cmd_reproduce(args) -> int:
-    from .reproduce import run
+    from .article.reproduce import run
 
     require_matplotlib("vtb reproduce")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its sweep journal and optimiser checkpoints are reused when they match)")
@@ -355,7 +355,7 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from .robust_study import run
+    from .article.robust_study import run
 
     require_matplotlib("vtb study")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")
@@ -367,7 +367,7 @@ def cmd_study(args) -> int:
 
 
 def cmd_study_grid(args) -> int:
-    from .studies import study
+    from .studies.grid import study
 
     cfg = _load_config(args.config)
     grid = {}
@@ -453,7 +453,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("name", nargs="?", help="example to print (e.g. article)")
     e.set_defaults(func=cmd_examples)
 
-    from .reproduce import DEFAULT_OPTIMISER
+    from .article.reproduce import DEFAULT_OPTIMISER
 
     r = sub.add_parser("reproduce", help="the article's whole chain: §3.3 histories, sweep, optimisation; figures, tables, report")
     r.add_argument("--out", required=True, help="output directory")

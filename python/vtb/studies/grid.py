@@ -28,10 +28,10 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import journal as jr
-from .config import Config
-from .errors import VtbError, config_error
-from .scaleout import run_cases
-from .tables import units_of
+from ..config.fields import Config
+from ..errors import VtbError, config_error
+from ..run.scaleout import run_cases
+from ..run.tables import units_of
 
 #: Short names of fields: the dampers' inertance, stiffness and damping as the article names them.
 ALIASES = {
@@ -80,7 +80,7 @@ def set_field(config: Config, path: str, value) -> None:
     a damper field of a configuration without dampers first gets :func:`vtb.tids_around`'s."""
     parts = _parts(path)
     if parts[0] == "tids" and len(parts) > 1 and config.tids is None:
-        from .presets import tids_around
+        from ..config.presets import tids_around
 
         config.tids = tids_around(config)
     obj = config
@@ -99,7 +99,7 @@ def index_names(config: Config) -> list:
     """Every index a run of ``config`` reports (the core's list; ``output.indices`` names a
     subset): per layer ``{layer}_disp_max``, ``_acc_max``, ``_acc_rms``, ``_acc_settle`` (and
     ``_acc_max_raw`` with a band limit), the first car's and the contacts' indices."""
-    from . import _core
+    from .. import _core
 
     return list(_core.index_names(config.to_core_json()))
 
@@ -158,7 +158,7 @@ class StudyResult:
 
     def to_pandas(self):
         """The columns as a DataFrame, index units in ``attrs["units"]`` (needs pandas)."""
-        from .tables import frame
+        from ..run.tables import frame
 
         return frame(self.columns, units_of(self.columns))
 
@@ -169,7 +169,7 @@ class StudyResult:
 
     def to_parquet(self, path) -> None:
         """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
-        from .tables import to_parquet
+        from ..run.tables import to_parquet
 
         to_parquet(self.to_pandas(), path)
 
@@ -271,7 +271,7 @@ def plan(config: Config, grid: Optional[Mapping] = None, *, cases: Optional[Sequ
 def _with_tids(config: Config, path: str) -> Config:
     """``config``, given :func:`vtb.tids_around`'s dampers if ``path`` is a damper field and it has none."""
     if _parts(path)[0] == "tids" and config.tids is None:
-        from .presets import tids_around
+        from ..config.presets import tids_around
 
         cfg = config.copy()
 

@@ -26,9 +26,9 @@ from typing import Any, Literal, Optional, Union
 
 import numpy as np
 
-from .errors import config_error
+from ..errors import config_error
 from .irregularity import Irregularity
-from . import _core
+from .. import _core
 from .schema import StrictFields
 from .schema import default as _default
 from .schema import documented
@@ -363,7 +363,7 @@ class Config(StrictFields):
         or missing fields raise :class:`~vtb.errors.ConfigError`. Values are validated by
         the core when the configuration runs, or now by :meth:`validate`; their types and
         ranges are checked here, by the core's schema."""
-        from . import _core
+        from .. import _core
 
         cfg = _from_plain(cls, data, "")
         _core.check_schema(cfg.to_core_json())
@@ -373,8 +373,8 @@ class Config(StrictFields):
         """Checks the whole configuration now (the core's validation, against the generated
         irregularity) and raises :class:`~vtb.errors.ConfigError` naming the first bad field;
         :func:`vtb.simulate` does the same check when it runs."""
-        from . import _core
-        from .simulate import _prepare, _profile_args
+        from .. import _core
+        from ..run.simulate import _prepare, _profile_args
 
         text, profile = _prepare(self)
         _core.validate(text, *_profile_args(profile))
@@ -601,6 +601,6 @@ def plausible_ranges() -> list:
     "max", "unit", "covers"}`` (SI units; ``[*]`` stands for every index of a list). A value
     outside its range raises :class:`vtb.ConfigError` naming the field, the value and the likely
     unit mistake, unless ``Config.accept_implausible`` lists the field's path."""
-    from . import _core
+    from .. import _core
 
     return [dict(field=f, min=lo, max=hi, unit=u, covers=c) for f, lo, hi, u, c in _core.plausible_ranges()]
