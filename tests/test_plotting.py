@@ -17,7 +17,7 @@ from fuzz_cases import small_config
 pytest.importorskip("matplotlib")
 from matplotlib.text import Text  # noqa: E402
 
-from vtb import plotting  # noqa: E402
+from vtb.analysis import plotting  # noqa: E402
 
 
 def test_importing_plotting_keeps_the_users_backend(tmp_path):

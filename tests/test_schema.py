@@ -88,7 +88,7 @@ def test_python_classes_have_the_cores_fields_defaults_and_types(cls, struct):
         if name in has_default and "default" in prop:
             f = fields[name]
             value = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-            plain = C._to_plain(value)
+            plain = C.to_plain(value)
             assert plain == prop["default"], f"{struct}.{name}: Python {plain!r}, core {prop['default']!r}"
         want = _json_types(prop)
         got = _python_kind(hints[name])
@@ -114,7 +114,7 @@ def test_defaults_instances_serialise_to_the_cores_defaults():
     """The sub-tables a Config creates by default are the core's defaults as a whole."""
     cfg = vtb.paper_config()
     for name, cls in (("discretisation", C.Discretisation), ("solver", C.Solver), ("output", C.Output)):
-        assert C._to_plain(cls()) == properties("Config")[name]["default"], name
+        assert C.to_plain(cls()) == properties("Config")[name]["default"], name
     assert cfg.to_dict()["solver"].keys() == properties("SolverConfig").keys()
 
 

@@ -15,7 +15,7 @@ import types
 
 from .analysis import comfort, spectra
 from .config import irregularity
-from ._core import __version__
+from .config.gateway import __version__
 from .config.fields import (
     Config,
     Coupling,
@@ -39,7 +39,9 @@ from .config.presets import crh3_car, example_config, examples, moving_load_conf
 from .analysis.spectra import low_pass
 from .analysis.contact import contact_patch_half_length
 from .config.resolution import LayerBand, ResolutionWarning, ResolvedBand, resolved_band
-from .run.simulate import Result, assembled_matrices, irregularity_profile, load, metric_unit, simulate, simulate_batch
+from .config.prepare import irregularity_profile
+from .run.indices import metric_unit
+from .run.simulate import Result, assembled_matrices, load, simulate, simulate_batch
 from .studies.grid import StudyResult, get_field, index_names, set_field, study
 from .article.tid_sweep import SweepResult, pinned_pinned_frequency, sweep
 from .analysis.track import Modes, decay_rate, deck_band, modes, receptance

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from .. import _core
+from ..config import gateway
 from ..config.schema import default
 
 
@@ -14,4 +14,4 @@ def contact_patch_half_length(load: float, wheel_radius: float, rail_crown_radiu
     ``Vehicle.contact_patch`` (there, of its static load). 6.42 mm for 72 kN on a 0.46 m
     wheel and a 0.3 m crown. Raises :class:`vtb.ConfigError` naming a non-positive or
     non-finite argument."""
-    return _core.patch_half_length(float(load), float(wheel_radius), float(rail_crown_radius))
+    return gateway.patch_half_length(load, wheel_radius, rail_crown_radius)

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _core
+from ..config import gateway
 from ..config.fields import Config
-from ..run.simulate import _prepare
+from ..config.prepare import prepare
 
 
 @dataclass
@@ -72,8 +72,8 @@ class FeSeaReport:
 def fesea_report(config: Config) -> FeSeaReport:
     """The FE–SEA correction of a hybrid configuration (``config.discretisation.method ==
     "hybrid"``); raises :class:`~vtb.errors.ConfigError` for other methods."""
-    text, _ = _prepare(config)
-    d = _core.fesea(text)
+    text, _ = prepare(config)
+    d = gateway.fesea(text)
     return FeSeaReport(
         omega_r=d["omega_r"],
         band=tuple(d["band"]),

@@ -56,7 +56,6 @@ Limitations
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from typing import Optional, Union
@@ -66,10 +65,10 @@ import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .. import _core
-from ..config.fields import Config, Solver, _to_plain
-from ..errors import SolverError, config_error
+from ..config.fields import Config
 from ..config.resolution import warn_beyond
+from ..errors import SolverError, config_error
+from .eigen import EigshFailed, System, _float_array, assemble, checked_frequencies, checked_positions, layer_index, shape_matrix, sliced_eigsh
 
 __all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT"]
 
@@ -92,109 +91,6 @@ DEFAULT_GEOMETRIC_POINTS = 40
 DENSE_EIGEN_LIMIT = 2000
 
 
-# ---------------------------------------------------------------------------- the structure
-@dataclass
-class _System:
-    """The assembled structure of one configuration (sparse CSC matrices)."""
-
-    json: str
-    n: int
-    m: sp.csc_matrix
-    k: sp.csc_matrix
-    c: sp.csc_matrix
-    layers: list  # [(name, offset, n_dofs)]
-    length: float
-
-
-def _structure_json(config: Config) -> str:
-    """The core JSON of ``config`` with its loads, speed, solver and outputs replaced by a
-    neutral single zero force, so that only the structure is validated and assembled."""
-    if not isinstance(config, Config):
-        raise config_error("config", type(config).__name__, "expected a vtb.Config")
-    d = json.loads(config.to_core_json())  # resolves a hybrid's default ω_r from the irregularity
-    d["vehicles"] = []
-    d["forces"] = [{"magnitude": 0.0, "x0": 0.0, "layer": None}]
-    d["speed"] = 0.0
-    d["solver"] = _to_plain(Solver(dt=1e-3, t_end=1e-3, initial_state="rest"))
-    d["output"] = {"points": []}
-    return json.dumps(d, allow_nan=False)
-
-
-def _assemble(config: Config) -> _System:
-    js = _structure_json(config)
-    out = _core.matrices(js)
-    n = int(out["n"])
-    mats = {}
-    for name in ("m", "k", "c"):
-        r, c, v = out[name]
-        # COO → CSC sums duplicate entries (both halves of the symmetric matrices are stored).
-        mats[name] = sp.coo_matrix((np.asarray(v, float), (np.asarray(r), np.asarray(c))), shape=(n, n)).tocsc()
-    return _System(js, n, mats["m"], mats["k"], mats["c"], [tuple(l) for l in out["layer_offsets"]], float(config.structure.length))
-
-
-def _layer_index(system: _System, layer, field_name: str = "layer") -> int:
-    names = [l[0] for l in system.layers]
-    if isinstance(layer, (bool, np.bool_)):
-        raise config_error(field_name, layer, f"expected a layer name or index (layers: {names})")
-    if isinstance(layer, (int, np.integer)):
-        if 0 <= int(layer) < len(names):
-            return int(layer)
-        raise config_error(field_name, layer, f"no layer with that index (0 … {len(names) - 1}; layers: {names})")
-    if isinstance(layer, str):
-        if layer in names:
-            return names.index(layer)
-        raise config_error(field_name, layer, f"no layer of that name (layers: {names})")
-    raise config_error(field_name, layer, f"expected a layer name or index (layers: {names})")
-
-
-def _float_array(value, field_name: str) -> np.ndarray:
-    if isinstance(value, (str, bytes)) or value is None:
-        raise config_error(field_name, value, "must be a number or a 1-D array of numbers")
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise config_error(field_name, value, "must be a number or a 1-D array of numbers") from None
-    if a.ndim > 1:
-        raise config_error(field_name, value, f"must be a number or a 1-D array (got shape {a.shape})")
-    return a
-
-
-def _positions(value, length: float, field_name: str) -> tuple[np.ndarray, bool]:
-    """(1-D float array, was_scalar), every entry finite and within [0, L]."""
-    a = _float_array(value, field_name)
-    scalar = a.ndim == 0
-    a = np.atleast_1d(a)
-    if a.size == 0:
-        raise config_error(field_name, value, "needs at least one position")
-    for i, x in enumerate(a):
-        sub = field_name if scalar else f"{field_name}[{i}]"
-        if not math.isfinite(x):
-            raise config_error(sub, float(x), "must be a finite position (m)")
-        if not 0.0 <= x <= length:
-            raise config_error(sub, float(x), f"must lie on the structure, 0 ≤ x ≤ L = {length} m")
-    return a, scalar
-
-
-def _frequencies(value, field_name: str = "frequencies") -> np.ndarray:
-    """A 1-D float array of frequencies (Hz), each finite and ≥ 0; at least one."""
-    a = np.atleast_1d(_float_array(value, field_name))
-    if a.size == 0:
-        raise config_error(field_name, value, "needs at least one frequency (Hz)")
-    for i, f in enumerate(a):
-        if not math.isfinite(f) or f < 0.0:
-            raise config_error(f"{field_name}[{i}]", float(f), "frequencies must be finite and ≥ 0 (Hz)")
-    return a
-
-
-def _shape_matrix(system: _System, layer: int, xs: np.ndarray) -> sp.csc_matrix:
-    """The n × len(xs) sparse matrix whose column i is layer ``layer``'s shape vector at xs[i]."""
-    starts, values = _core.shapes(system.json, layer, np.ascontiguousarray(xs, dtype=float))
-    starts = np.asarray(starts, dtype=np.int64)
-    values = np.asarray(values, dtype=float)
-    p, width = values.shape
-    rows = (starts[:, None] + np.arange(width)[None, :]).ravel()
-    cols = np.repeat(np.arange(p), width)
-    return sp.csc_matrix((values.ravel(), (rows, cols)), shape=(system.n, p))
 
 
 #: A dynamic stiffness whose estimated 1-norm condition number exceeds this (≈ 1/(45·ε)) is
@@ -229,7 +125,7 @@ def _condition_1(a: sp.csc_matrix, lu) -> float:
     return norm_a * est
 
 
-def _harmonic_solve(system: _System, freqs: np.ndarray, force: sp.csc_matrix, response: sp.csc_matrix, field_name: str = "frequencies") -> np.ndarray:
+def _harmonic_solve(system: System, freqs: np.ndarray, force: sp.csc_matrix, response: sp.csc_matrix, field_name: str = "frequencies") -> np.ndarray:
     """Rᵀ (K + iωC − ω²M)⁻¹ F for every frequency: shape (n_freq, n_response, n_force)."""
     k = system.k.astype(complex)
     c = system.c.astype(complex)
@@ -315,20 +211,20 @@ def receptance(
     >>> a = vtb.receptance(cfg, 80.32, [100.0, 1000.0])           # point receptance of the rail
     >>> t = vtb.receptance(cfg, 80.32, 1000.0, response_x=[81.0, 82.0])   # shape (1, 2)
     """
-    system = _assemble(config)
-    li = _layer_index(system, layer, "layer")
-    ri = li if response_layer is None else _layer_index(system, response_layer, "response_layer")
-    xf, _ = _positions(x, system.length, "x")
+    system = assemble(config)
+    li = layer_index(system, layer, "layer")
+    ri = li if response_layer is None else layer_index(system, response_layer, "response_layer")
+    xf, _ = checked_positions(x, system.length, "x")
     if xf.size != 1:
         raise config_error("x", x, "must be a single position (m); use response_x for several responses")
-    freqs = _frequencies(frequencies)
+    freqs = checked_frequencies(frequencies)
     if response_x is None:
         xr, scalar = xf, True
     else:
-        xr, scalar = _positions(response_x, system.length, "response_x")
+        xr, scalar = checked_positions(response_x, system.length, "response_x")
     warn_beyond(config, config.structure.layers[ri].name, float(freqs.max()), "the receptance", stepped=False)
-    force = _shape_matrix(system, li, xf)
-    resp = _shape_matrix(system, ri, xr)
+    force = shape_matrix(system, li, xf)
+    resp = shape_matrix(system, ri, xr)
     out = _harmonic_solve(system, freqs, force, resp)[:, :, 0]
     return out[:, 0] if scalar else out
 
@@ -412,17 +308,17 @@ def decay_rate(
         As :func:`receptance`; also for positions that do not fit on the structure, are not
         increasing, or fewer than two, and for an x0 where the point receptance vanishes.
     """
-    system = _assemble(config)
-    li = _layer_index(system, layer, "layer")
+    system = assemble(config)
+    li = layer_index(system, layer, "layer")
     L = system.length
     if x0 is None:
         x0v = 0.5 * L
     else:
-        xa, scalar = _positions(x0, L, "x0")
+        xa, scalar = checked_positions(x0, L, "x0")
         if not scalar and xa.size != 1:
             raise config_error("x0", x0, "must be a single position (m)")
         x0v = float(xa[0])
-    freqs = _frequencies(frequencies)
+    freqs = checked_frequencies(frequencies)
     warn_beyond(config, config.structure.layers[li].name, float(freqs.max()), "the decay rate", stepped=False)
     if direction is not None and (isinstance(direction, bool) or direction not in (1, -1)):
         raise config_error("direction", direction, "must be +1 (towards x = L) or -1 (towards x = 0)")
@@ -455,8 +351,8 @@ def decay_rate(
         if d[-1] > room[direction] * (1 + 1e-12) + 1e-12:
             raise config_error("positions", positions, f"the farthest position x0 {'+' if direction > 0 else '-'} {d[-1]} m lies off the structure [0, {L}] m")
     xs = np.clip(x0v + direction * d, 0.0, L)
-    force = _shape_matrix(system, li, np.array([x0v]))
-    resp = _shape_matrix(system, li, xs)
+    force = shape_matrix(system, li, np.array([x0v]))
+    resp = shape_matrix(system, li, xs)
     a = _harmonic_solve(system, freqs, force, resp)[:, :, 0]
     a0 = np.abs(a[:, 0]) ** 2
     if np.any(a0 == 0.0):
@@ -518,13 +414,13 @@ class Modes:
         numpy.ndarray
             Shape (n_x, n_modes), or (n_x,) for one ``mode`` (a scalar x counts as n_x = 1).
         """
-        system = _System(self._json, self._n, None, None, None, self.layers, self._length)
-        li = _layer_index(system, layer, "layer")
-        xs, _ = _positions(x, self._length, "x")
+        system = System(self._json, self._n, None, None, None, self.layers, self._length)
+        li = layer_index(system, layer, "layer")
+        xs, _ = checked_positions(x, self._length, "x")
         if mode is not None:
             if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or not -len(self) <= mode < len(self):
                 raise config_error("mode", mode, f"must be an integer index below {len(self)}")
-        s = _shape_matrix(system, li, xs)
+        s = shape_matrix(system, li, xs)
         phi = self.shapes if mode is None else self.shapes[:, [int(mode)]]
         out = np.asarray(s.T @ phi)
         return out[:, 0] if mode is not None else out
@@ -540,61 +436,6 @@ def _normalise_modes(lam: np.ndarray, phi: np.ndarray, m: sp.csc_matrix):
     return lam, phi
 
 
-#: Eigenpairs requested per shift-invert slice of :func:`modes`.
-EIGEN_BLOCK = 40
-
-
-class _EigshFailed(Exception):
-    pass
-
-
-def _sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
-    """Every eigenpair of K φ = λ M φ with start ≤ λ ≤ hi, by spectrum slicing.
-
-    Each slice factorises K − σM at a shift σ = b, the lower edge of the part not yet covered,
-    and asks ARPACK for the ``EIGEN_BLOCK`` eigenvalues nearest σ; their radius r = max|λ − σ|
-    guarantees that every eigenvalue in [σ − r, σ + r] is among them. The eigenvalues at or above
-    b are accepted up to a boundary placed in the middle of the widest gap between consecutive
-    found eigenvalues in the upper half of the slice — a true gap, since the slice is complete
-    there — so no eigenvalue is counted twice or missed at a boundary, and the next shift never
-    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search. Raises
-    :class:`_EigshFailed` when ARPACK fails or a slice would need n − 1 eigenpairs.
-    """
-    n = k.shape[0]
-    block = min(EIGEN_BLOCK, n - 2)
-    if block < 1:
-        raise _EigshFailed
-    lams, phis = [], []
-    b = start
-    while True:
-        try:
-            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM")
-        except (spla.ArpackError, spla.ArpackNoConvergence, RuntimeError, ValueError):
-            raise _EigshFailed from None
-        top = b + float(np.max(np.abs(lam - b)))
-        order = np.argsort(lam)
-        lam, phi = lam[order], phi[:, order]
-        up = lam >= b
-        u = lam[up]
-        if top > hi:
-            sel = up & (lam <= hi)
-            lams.append(lam[sel])
-            phis.append(phi[:, sel])
-            break
-        if u.size < 2:
-            if block >= n - 2:
-                raise _EigshFailed
-            block = min(2 * block, n - 2)
-            continue
-        j0 = max(0, u.size // 2 - 1)
-        gaps = np.diff(u[j0:])
-        j = j0 + int(np.argmax(gaps))
-        boundary = 0.5 * (u[j] + u[j + 1])
-        sel = up & (lam < boundary)
-        lams.append(lam[sel])
-        phis.append(phi[:, sel])
-        b = boundary
-    return np.concatenate(lams), np.concatenate(phis, axis=1)
 
 
 def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
@@ -643,13 +484,13 @@ def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
         raise config_error("fmin", fmin, "must be ≥ 0 (Hz)")
     if fmin >= fmax:
         raise config_error("fmin", fmin, f"must be < fmax = {fmax} Hz")
-    system = _assemble(config)
+    system = assemble(config)
     n = system.n
     lo, hi = (2.0 * math.pi * fmin) ** 2, (2.0 * math.pi * fmax) ** 2
     method = "shift-invert"
     try:
-        lam, phi = _sliced_eigsh(system.k, system.m, lo - 1e-6 * hi, hi)
-    except _EigshFailed:
+        lam, phi = sliced_eigsh(system.k, system.m, lo - 1e-6 * hi, hi)
+    except EigshFailed:
         if n > DENSE_EIGEN_LIMIT:
             raise SolverError(f"the shift-invert eigensolver failed on {n} DOFs (the dense fallback is limited to {DENSE_EIGEN_LIMIT}); lower fmax or split the band with fmin") from None
         method = "dense"
@@ -672,7 +513,7 @@ def deck_band(config: Config, fmax: float = 120.0) -> float:
     exceeds the default 30 Hz (short stiff spans).
 
     Raises :class:`vtb.ConfigError` when fewer than three deck modes lie below ``fmax``."""
-    system = _assemble(config)
+    system = assemble(config)
     found = modes(config, fmax)
     _, first, count = system.layers[-1]
     deck = slice(first, first + count)

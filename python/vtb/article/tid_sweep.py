@@ -28,6 +28,7 @@ from ..studies.journal import config_stamp
 from ..config.presets import tids_around
 from ..config.resolution import pinned_pinned_frequency
 from ..studies import grid as studies
+from ..run.indices import index_names
 from ..studies.grid import StudyResult, rows_of, study
 
 __all__ = ["sweep", "SweepResult", "config_stamp", "pinned_pinned_frequency"]
@@ -132,9 +133,7 @@ def grid(b_t: Sequence[float], k_t: Sequence[float], c_t: Sequence[float]) -> li
 def recording_metrics(config: Config) -> Config:
     """``config`` reporting only the indices of :data:`METRICS` it has (``output.indices``):
     its runs record only the layers those need."""
-    from .. import _core
-
-    names = set(_core.index_names(config.to_core_json()))
+    names = set(index_names(config))
     config.output.indices = [m for m in METRICS if m in names]
     return config
 

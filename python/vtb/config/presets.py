@@ -7,11 +7,10 @@ irregularity. Every choice the article leaves open is documented in ``docs/model
 
 from __future__ import annotations
 
-import json
 import math
 from typing import Optional, Sequence
 
-from .. import _core
+from . import gateway
 from .fields import TIDs, Config, Coupling, Layer, MovingForce, Output, RayleighCoefficients, Solver, Structure, Vehicle
 from .irregularity import Irregularity
 
@@ -72,7 +71,7 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
         from ..errors import config_error
 
         raise config_error("model", model, f"must be one of {PAPER_MODELS}")
-    cfg = Config.from_dict(json.loads(_core.preset({"article": "paper", "converged": "paper_converged", "fast": "paper_fast"}[model])))
+    cfg = Config.from_dict(gateway.preset({"article": "paper", "converged": "paper_converged", "fast": "paper_fast"}[model]))
     cfg.irregularity = paper_irregularity(seed, PAPER_CALIBRATED_SCALE if calibrated else 1.0)
     # ω_r follows the irregularity band and speed (800 Hz here) when either is changed.
     cfg.discretisation.omega_r = None

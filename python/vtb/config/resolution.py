@@ -16,9 +16,19 @@ import warnings
 from dataclasses import dataclass
 from typing import Optional
 
-from .. import _core
-from .fields import Config
+import numpy as np
+
+from . import gateway
+from .fields import Config, structure_json
 from ..errors import config_error
+
+
+def real_or_none(v) -> Optional[float]:
+    """``v`` as a float when it is a finite real number (not a bool), else ``None``."""
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+        return None
+    v = float(v)
+    return v if np.isfinite(v) else None
 
 
 class ResolutionWarning(UserWarning):
@@ -74,24 +84,21 @@ class ResolvedBand:
         return "\n".join(rows)
 
 
-def _core_bands(config: Config) -> tuple[list, Optional[float]]:
-    """The core's bands and pinned–pinned frequency of ``config``: its structure and time step,
-    as a structure-only configuration (what the frequency-domain tools assemble) with the
-    run's Δt."""
-    from ..run.simulate import _real
-    from ..analysis.track import _structure_json
-
-    plain = json.loads(_structure_json(config))
-    dt = _real(getattr(config.solver, "dt", None))
+def _core_bands(config: Config, text: Optional[str] = None) -> tuple[list, Optional[float]]:
+    """The core's bands and pinned–pinned frequency of ``config`` (its core JSON ``text`` when
+    made): its structure and time step, as a structure-only configuration (what the
+    frequency-domain tools assemble) with the run's Δt."""
+    plain = json.loads(structure_json(config, text))
+    dt = real_or_none(getattr(config.solver, "dt", None))
     if dt is not None and dt > 0:
         plain["solver"]["dt"] = plain["solver"]["t_end"] = dt
-    return _core.resolved_bands(json.dumps(plain))
+    return gateway.resolved_bands(json.dumps(plain))
 
 
-def resolved_band(config: Config) -> ResolvedBand:
-    """The band each layer of ``config`` resolves (module docstring). Raises
-    :class:`vtb.ConfigError` for an invalid structure."""
-    bands, f_pp = _core_bands(config)
+def resolved_band(config: Config, text: Optional[str] = None) -> ResolvedBand:
+    """The band each layer of ``config`` resolves (module docstring); ``text``: its core JSON
+    when the caller has made it. Raises :class:`vtb.ConfigError` for an invalid structure."""
+    bands, f_pp = _core_bands(config, text)
     return ResolvedBand({d["layer"]: LayerBand(**d) for d in bands}, f_pp)
 
 
@@ -108,11 +115,11 @@ def pinned_pinned_frequency(config: Config) -> float:
     return f_pp
 
 
-def warn_beyond(config: Config, layer: str, f_top: float, what: str, stepped: bool = True) -> None:
+def warn_beyond(config: Config, layer: str, f_top: float, what: str, stepped: bool = True, band: Optional[ResolvedBand] = None) -> None:
     """A :class:`ResolutionWarning` if ``f_top`` (Hz) lies above the band ``layer`` resolves: its
     ``f_max`` for a time-stepped run (``stepped``), else its basis alone (a frequency-domain
-    answer has no time step)."""
-    band = resolved_band(config).layers.get(layer)
+    answer has no time step). ``band``: ``config``'s :func:`resolved_band` when known."""
+    band = (band or resolved_band(config)).layers.get(layer)
     if band is None:
         return
     limit, by = (band.f_max, band.limited_by) if stepped else (band.basis_f_max, "basis")

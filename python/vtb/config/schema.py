@@ -10,10 +10,10 @@ import inspect
 import json
 from typing import Any
 
-from .. import _core
+from . import gateway
 
 #: The JSON schema of the core's configuration (``$defs`` holds one entry per struct).
-SCHEMA: dict = json.loads(_core.schema())
+SCHEMA: dict = gateway.schema()
 
 
 def properties(struct: str) -> dict:

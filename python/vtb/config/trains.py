@@ -12,15 +12,14 @@ and returns their :class:`~vtb.config.Vehicle` s, ready for ``Config.vehicles``;
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from typing import Optional
 
-from .. import _core
+from . import gateway
 from .fields import Vehicle
 from ..errors import config_error
 
-_LIBRARY = {t["name"]: t for t in json.loads(_core.train_library())}
+_LIBRARY = {t["name"]: t for t in gateway.train_library()}
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,7 @@ from typing import Callable, Iterator, Optional, Sequence
 
 import numpy as np
 
-from .. import _core
+from ..config import gateway
 from ..config.fields import Config
 from ..errors import SolverError, config_error
 from .simulate import DEFAULT_LANES, SYNTHESIS_LANES, _reduction, simulate_batch
@@ -118,7 +118,7 @@ def run_cases(configs: Sequence[Config], on_result: Callable, *, executor: Optio
     # A task holds runs of one model (the core's key), so that its lockstep groups are full.
     members: dict = {}
     for i, c in enumerate(configs):
-        members.setdefault(_core.model_key(c.to_core_json()), []).append(i)
+        members.setdefault(gateway.model_key(c.to_core_json()), []).append(i)
     tasks = [m[a:a + size] for m in members.values() for a in range(0, len(m), size)]
     futures = {executor.submit(_task, [configs[i] for i in t]): t for t in tasks}
     try:

@@ -4,164 +4,22 @@ parallel inside the Rust core (all cores, GIL released)."""
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
-import os
 import sys
-import threading
-import warnings
-from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Callable, NamedTuple, Optional, Sequence, Union
+from typing import Callable, Optional, Sequence, Union
 
 import numpy as np
 
 from .. import _core
-from ..config.fields import Config, _to_plain, check_types
-from ..config.irregularity import Irregularity
+from ..analysis.comfort import iso2631, sperling
+from ..analysis.spectra import psd, third_octave, welch_third_octave
+from ..config.fields import Config
+from ..config.prepare import prepare
+from ..config.resolution import warn_beyond
 from ..errors import VtbError, config_error
-
-#: Units of the metrics by the ending of their names (``{layer}_acc_max`` → m/s²).
-METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_max_raw", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("_comfort_aw", "m/s²"), ("_force_max", "N"), ("_force_min", "N"), ("contact_loss_events", "–"))
-
-
-def metric_unit(name: str) -> str:
-    """The unit of a metric (``"m/s²"`` for ``rail_acc_max``)."""
-    for ending, unit in METRIC_UNITS:
-        if name.endswith(ending):
-            return unit
-    raise config_error("metric", name, "no such metric")
-
-
-#: Extra length of generated irregularity beyond the structure at each end (m).
-_PROFILE_MARGIN = 0.0
-
-
-def _real(v) -> Optional[float]:
-    """``v`` as a float when it is a finite real number (not a bool), else ``None``."""
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-        return None
-    v = float(v)
-    return v if np.isfinite(v) else None
-
-
-def _prepare(cfg: Config) -> tuple[str, tuple]:
-    """The core JSON of a configuration and its irregularity profile (x0, dx, values). The
-    plausible ranges and the irregularity, which lives on this side, are checked here; the
-    core validates the rest once, when it runs the configuration."""
-    if not isinstance(cfg, Config):
-        raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
-    text = cfg.to_core_json()
-    # A unit mistake (a speed in km/h) is named before the irregularity's checks it would trip.
-    _core.check_plausible(text)
-    if not isinstance(cfg.irregularity, Irregularity):
-        raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
-    check_types(cfg.irregularity, "irregularity")
-    vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
-    cfg.irregularity.validate(speed=_real(cfg.speed), dt=_real(getattr(cfg.solver, "dt", None)), wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
-    _warn_band_limit(cfg)
-    if any(q.kind == "wheel_flat" for q in (cfg.irregularity, *cfg.irregularity.parts)):
-        _core.validate(text)  # a flat is sampled on its vehicle's wheel: a bad wheel is named first
-    return text, irregularity_profile(cfg)
-
-
-def _warn_band_limit(cfg: Config) -> None:
-    """A band-limited index beyond the band the run resolves for its top layer, or a band level
-    (``output.band_levels``) beyond the band of its layer, warns (:class:`vtb.ResolutionWarning`);
-    a configuration the core refuses is left to the run, which names the field."""
-    from ..config.resolution import warn_beyond
-
-    fc = _real(getattr(cfg.output, "band_limit", None))
-    layers = getattr(cfg.structure, "layers", None)
-    if not layers:
-        return
-    bands = [b for b in (_real(b) for b in (getattr(cfg.output, "band_levels", None) or [])) if b is not None and b > 0]
-    try:
-        if fc is not None:
-            warn_beyond(cfg, layers[0].name, fc, "output.band_limit")
-        if bands:
-            # the top band's upper edge: exact base-10 midband · 10^(1/20) (docs/spectra.md)
-            top = 1000.0 * 10.0 ** (round(10.0 * np.log10(max(bands) / 1000.0)) / 10.0 + 0.05)
-            for layer in layers:
-                warn_beyond(cfg, layer.name, top, f"output.band_levels ({max(bands):g} Hz band, {layer.name})")
-    except (VtbError, AttributeError, TypeError):
-        pass
-
-
-class SampledProfile(NamedTuple):
-    """What the wheels of a run roll on, on the grid x0 + i·dx (m): the rail's irregularity
-    ``values`` (m, positive = dip) and, with a wheel flat, one ``treads`` row per wheel (m, an
-    empty array for a round wheel; vehicles in order, wheelsets front to rear)."""
-
-    x0: float
-    dx: float
-    values: np.ndarray
-    treads: list
-
-
-#: Bytes of generated profiles this process keeps (the least recently used go first).
-PROFILE_CACHE_BYTES = 256 * 2**20
-_profiles: OrderedDict = OrderedDict()  # key → (profile, the warnings drawing it gave)
-_profiles_lock = threading.Lock()
-if hasattr(os, "register_at_fork"):  # a child forked while another thread held the lock gets a free one
-    os.register_at_fork(after_in_child=lambda: globals().update(_profiles_lock=threading.Lock()))
-
-
-def _nbytes(profile: "SampledProfile") -> int:
-    return profile.values.nbytes + sum(t.nbytes for t in profile.treads)
-
-
-def irregularity_profile(cfg: Config) -> SampledProfile:
-    """The sampled irregularity a configuration runs on (arrays read-only). A structure length
-    the core will refuse gets no profile (the core then names the length).
-
-    A profile is a function of the irregularity, the stretch the wheels travel, the memory
-    budget and the wheels' radii alone, and generating one costs tens of milliseconds: this
-    process keeps the last ones (:data:`PROFILE_CACHE_BYTES`; a larger one is not kept), so the
-    runs of a study on one sample — every design, every generation, every executor task on this
-    worker — share it. The warnings drawing it gave are given again at every call."""
-    L = _real(getattr(cfg.structure, "length", None))
-    if L is None or L <= 0:
-        return SampledProfile(0.0, 1.0, np.zeros(0), [])
-    budget = _real(getattr(cfg.solver, "memory_budget", None))
-    radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(v.n_wheels)]
-    # Wheels may start before the structure and end beyond it (on a rigid track).
-    try:
-        travel = _core.wheel_travel(cfg.to_core_json())
-    except (VtbError, ValueError, TypeError):  # refused later, naming the field
-        travel = None
-    lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
-    spec = json.dumps(_to_plain(cfg.irregularity), default=repr)  # a measured profile's values too
-    key = (hashlib.sha256(spec.encode()).hexdigest(), lo, hi, budget, tuple(radii))
-    with _profiles_lock:
-        hit = _profiles.get(key)
-        if hit is not None:
-            _profiles.move_to_end(key)
-    if hit is None:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            x0, dx, values, treads = cfg.irregularity.sample(lo - _PROFILE_MARGIN, hi + _PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
-        if treads and not values.size:
-            values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
-        for a in (values, *treads):
-            a.flags.writeable = False  # shared by every run on this sample
-        hit = (SampledProfile(x0, dx, values, treads), [(w.message, w.category) for w in caught])
-        if _nbytes(hit[0]) <= PROFILE_CACHE_BYTES:
-            with _profiles_lock:
-                _profiles[key] = hit
-                total = sum(_nbytes(p) for p, _ in _profiles.values())
-                while total > PROFILE_CACHE_BYTES:
-                    _, (old, _) = _profiles.popitem(last=False)
-                    total -= _nbytes(old)
-    profile, said = hit
-    for message, category in said:
-        warnings.warn(message, category, stacklevel=3)
-    return profile
-
-
-def _profile_args(profile: SampledProfile) -> tuple:
-    x0, dx, values, treads = profile
-    return x0, dx, values if values.size else None, treads
+from .indices import metric_unit
+from .synthesis import reduction
+from .tables import frame, to_parquet
 
 
 @dataclass(eq=False)
@@ -228,8 +86,6 @@ class Result:
         ``car{i}_{dof}_acc`` (m/s² or rad/s²) for the DOFs of the vehicle model
         (``config.vehicles[0].dofs``); ``contact_force_{w}`` (N) per wheel. Units in ``attrs["units"]``
         (needs pandas)."""
-        from .tables import frame
-
         cols, units = {}, {}
         for li, name in enumerate(self.layer_names):
             for pi, x in enumerate(self.points):
@@ -253,8 +109,6 @@ class Result:
     def to_parquet(self, path) -> None:
         """The histories of :meth:`to_pandas` as a Parquet file, units in its metadata
         (needs pyarrow; :func:`vtb.read_parquet` reads it back)."""
-        from .tables import to_parquet
-
         to_parquet(self.to_pandas(), path)
 
     def __repr__(self) -> str:
@@ -309,8 +163,6 @@ class Result:
     def spectrum(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, nperseg: Optional[int] = None) -> tuple[np.ndarray, np.ndarray]:
         """One-sided PSD (Welch, Hann window, half-overlapping segments; :mod:`vtb.spectra`) of
         :meth:`series`: (f in Hz, PSD in (m/s²)²/Hz or m²/Hz)."""
-        from ..analysis.spectra import psd
-
         t, x = self.series(layer, quantity, point, window)
         return psd(x, 1.0 / self.config.solver.dt, nperseg)
 
@@ -322,20 +174,14 @@ class Result:
         transient, so these (not Welch's, :meth:`welch_third_octave`) are its band levels. Bands
         beyond the band the run resolves for the layer (:func:`vtb.resolved_band`) warn
         (:class:`vtb.ResolutionWarning`)."""
-        from ..analysis.spectra import third_octave
-
         return self._bands(third_octave, layer, quantity, point, window, **options)
 
     def welch_third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
         """One-third-octave band levels of :meth:`series` by Welch's PSD, for a stationary part
         of a run (:func:`vtb.spectra.welch_third_octave`); warns as :meth:`third_octave`."""
-        from ..analysis.spectra import welch_third_octave
-
         return self._bands(welch_third_octave, layer, quantity, point, window, **options)
 
     def _bands(self, method, layer: str, quantity: str, point: int, window, **options) -> dict:
-        from ..config.resolution import warn_beyond
-
         t, x = self.series(layer, quantity, point, window)
         bands = method(x, 1.0 / self.config.solver.dt, quantity, **options)
         if len(bands["upper"]):
@@ -348,8 +194,6 @@ class Result:
         (m/s², with ``mtvv_ratio`` and ``duration`` in s; :func:`vtb.comfort.iso2631`) and
         Sperling's ``wz`` (dimensionless; :func:`vtb.comfort.sperling`). Short records warn
         (:class:`vtb.comfort.ComfortWarning`)."""
-        from ..analysis.comfort import iso2631, sperling
-
         if isinstance(car, bool) or not isinstance(car, int) or not 0 <= car < self.vehicle_acc.shape[1]:
             raise config_error("car", car, f"must index one of the {self.vehicle_acc.shape[1]} cars")
         a, t = self.vehicle_acc[:, car, 0], self.t
@@ -439,7 +283,7 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
         raise config_error("progress", progress, 'must be "auto", True, False or a callable f(done, total)')
     if progress == "auto" and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
         progress = False
-    text, profile = _prepare(config)
+    text, profile = prepare(config)
     bar = None
 
     def tick(done, total):
@@ -454,7 +298,7 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
             bar.update(done - bar.n)
 
     try:
-        out = _core.simulate(text, *_profile_args(profile), reduction=_reduction(config), progress=None if progress is False else tick)
+        out = _core.simulate(text, *profile.core_args(), reduction=_reduction(config), progress=None if progress is False else tick)
         if bar is not None:
             bar.update(bar.total - bar.n)
     finally:
@@ -467,8 +311,6 @@ def _reduction(config: Config):
     """The core reduction a configuration with ``discretisation.synthesis_cutoff`` runs on."""
     if config.discretisation.synthesis_cutoff is None:
         return None
-    from .synthesis import reduction
-
     return reduction(config).to_core()
 
 
@@ -518,7 +360,7 @@ def simulate_batch(
     order = []
     for i, cfg in enumerate(configs):
         try:
-            text, profile = _prepare(cfg)  # every configuration checked; one sample's runs share its profile
+            text, profile = prepare(cfg)  # every configuration checked; one sample's runs share its profile
         except VtbError as e:
             if on_error == "raise":
                 raise
@@ -526,7 +368,7 @@ def simulate_batch(
             continue
         if id(profile) not in keys:  # (held in keys: an id is not reused while the batch runs)
             keys[id(profile)] = (len(profiles), profile)
-            profiles.append(_profile_args(profile))
+            profiles.append(profile.core_args())
         profile_index.append(keys[id(profile)][0])
         jsons.append(text)
         order.append(i)

@@ -34,14 +34,17 @@ import math
 import os
 import tempfile
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse as sp
 
-from .. import _core
-from ..config.fields import Config
+from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, layer_index,
+                              shape_matrix, sliced_eigsh, spd_solver)
+from ..config.fields import Config, structure_json
 from ..errors import SolverError, config_error
 
 #: Version of the reduction's algorithm and file layout: part of every cache key.
@@ -111,10 +114,7 @@ class Reduction:
     def to_core(self):
         """The core's copy (made once); ψ is then dropped here."""
         if self.core is None:
-            flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
-            self.core = _core.Reduction(  # ψ read in place: no copy on this side
-                flat(self.lam.real), flat(self.lam.imag), flat(self.weight), np.ascontiguousarray(self.psi, dtype=complex),
-                int(self.rail_dofs), int(self.band), flat(self.residual))
+            self.core = core_reduction(self.lam, self.weight, self.psi, self.rail_dofs, self.band, self.residual)
             self.psi = None
         return self.core
 
@@ -143,12 +143,10 @@ def cache_key(config: Config) -> str:
     """The hex digest of everything a reduction depends on: the structure and discretisation
     (not the dampers, vehicles, excitation or solver), the cut-off, the basis ratio, the
     residual reach and the format."""
-    from ..analysis.track import _structure_json
-
     cutoff = config.discretisation.synthesis_cutoff
     if cutoff is None:
         raise config_error("discretisation.synthesis_cutoff", None, "the configuration does not ask for the synthesis")
-    structure = json.loads(_structure_json(_structure_config(config)))
+    structure = json.loads(structure_json(_structure_config(config)))
     structure.pop("accept_implausible", None)  # an opt-out changes no matrix
     # The neutral loads, solver and outputs the structure is assembled with are constants; left
     # in, every field added to them would orphan every cached reduction.
@@ -162,26 +160,20 @@ def cache_key(config: Config) -> str:
 def _attachments(system, config: Config) -> np.ndarray:
     """n × a: s_upper − s_lower at every point of a discrete coupling with a dashpot
     (s_upper alone on the ground)."""
-    from ..analysis.track import _layer_index, _shape_matrix
-
     cols = []
     for c in config.structure.couplings:
         if c.kind != "discrete" or not c.damping or not c.positions:
             continue
         xs = np.asarray(c.positions, float)
-        up = _shape_matrix(system, _layer_index(system, c.upper), xs)
-        cols.append(up if c.lower == "ground" else up - _shape_matrix(system, _layer_index(system, c.lower), xs))
+        up = shape_matrix(system, layer_index(system, c.upper), xs)
+        cols.append(up if c.lower == "ground" else up - shape_matrix(system, layer_index(system, c.lower), xs))
     if not cols:
         return np.zeros((system.n, 0))
-    import scipy.sparse as sp
-
     return sp.hstack(cols).toarray()
 
 
 def build(config: Config, progress=None) -> Reduction:
     """Computes the reduction of ``config``'s structure (no cache; see :func:`reduction`)."""
-    from ..analysis.track import _EigshFailed, _assemble, _sliced_eigsh
-
     t0 = time.perf_counter()
     cfg = _structure_config(config)
     if cfg.discretisation.method != "fem":
@@ -190,16 +182,15 @@ def build(config: Config, progress=None) -> Reduction:
     if not (math.isfinite(cutoff) and cutoff > 0):
         raise config_error("discretisation.synthesis_cutoff", cutoff, "must be a finite cut-off > 0 (Hz)")
     note = progress or (lambda _msg: None)
-    system = _assemble(cfg)
+    system = assemble(cfg)
     m, k, c = system.m.tocsc(), system.k.tocsc(), system.c.tocsc()
     hi = (2 * math.pi * BASIS_RATIO * cutoff) ** 2
     note("undamped modes")
     try:
-        w2, phi = _sliced_eigsh(k, m, -1e-6 * hi, hi)
-    except _EigshFailed:
+        w2, phi = sliced_eigsh(k, m, -1e-6 * hi, hi)
+    except EigshFailed:
         raise SolverError("synthesis: the undamped eigensolver failed") from None
-    kc = k.tocoo()  # K is symmetric positive definite: the core's LDLᵀ, solving 8 columns per pass
-    solver = _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
+    solver = spd_solver(k)  # K is symmetric positive definite
     # Attachment vectors of the dashpots, less what the modes already hold (static part).
     b = _attachments(system, cfg)
     if b.shape[1]:
@@ -313,16 +304,12 @@ def reduction(config: Config, progress: bool = False) -> Reduction:
     red, why = _load(path, key)
     if red is None:
         if why != "not cached":
-            import warnings
-
             warnings.warn(f"the cached reduction {path} is {why}: rebuilding it", stacklevel=2)
         say = (lambda msg: print(f"vtb.synthesis: {msg} …", flush=True)) if progress else None
         red = build(config, say)
         try:
             _save(red, path)
         except OSError as e:
-            import warnings
-
             warnings.warn(f"could not cache the reduction at {path} ({e})", stacklevel=2)
     _within_budget(red, config)
     red.to_core()
@@ -346,15 +333,13 @@ def receptance(config: Config, x: float, frequencies, response_x=None) -> np.nda
     filter of the load point x as the engine steps it (docs/synthesis.md), the same
     quantity :func:`vtb.receptance` computes from the full finite-element matrices (which it
     verifies, docs/synthesis.md). Shape (n_freq,) or (n_freq, n_points) as there."""
-    from ..analysis.track import _assemble, _frequencies, _positions, _shape_matrix
-
     red = reduction(config)
-    system = _assemble(_structure_config(config))
-    xf, _ = _positions(x, system.length, "x")
-    freqs = _frequencies(frequencies)
-    xr, scalar = (xf, True) if response_x is None else _positions(response_x, system.length, "response_x")
-    sf = _shape_matrix(system, 0, xf).toarray()[:, 0]
-    sr = _shape_matrix(system, 0, xr).toarray()
+    system = assemble(_structure_config(config))
+    xf, _ = checked_positions(x, system.length, "x")
+    freqs = checked_frequencies(frequencies)
+    xr, scalar = (xf, True) if response_x is None else checked_positions(response_x, system.length, "response_x")
+    sf = shape_matrix(system, 0, xf).toarray()[:, 0]
+    sr = shape_matrix(system, 0, xr).toarray()
     pf, pr = red.project(sf), red.project(sr)  # (m,), (n_points, m)
     resid = np.array([_band_form(red.residual[0], red, sr[:, i], sf) for i in range(sr.shape[1])])
     nz = np.flatnonzero(sf[: red.rail_dofs])

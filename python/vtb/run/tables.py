@@ -9,7 +9,8 @@ import json
 from pathlib import Path
 from typing import Sequence
 
-from ..errors import VtbError, config_error
+from ..errors import ConfigError, VtbError, config_error
+from .indices import metric_unit
 
 
 def _pandas():
@@ -86,12 +87,10 @@ def metrics_table(results: Sequence):
     """One row per result of a run or a batch (:class:`vtb.Result`, or the metrics dict
     :func:`vtb.simulate_batch` returns; ``None`` or an exception for a failed job gives a row of
     NaN with its ``error``), one column per metric, units (SI) in ``attrs["units"]``."""
-    from .simulate import Result, metric_unit
-
     rows = []
     for i, r in enumerate(results):
-        if isinstance(r, (Result, dict)):
-            rows.append({**(r.metrics() if isinstance(r, Result) else r), "error": ""})
+        if isinstance(r, dict) or callable(getattr(r, "metrics", None)):  # a metrics dict or a vtb.Result
+            rows.append({**(r if isinstance(r, dict) else r.metrics()), "error": ""})
         elif r is None or isinstance(r, BaseException):
             rows.append({"error": "" if r is None else f"{type(r).__name__}: {r}"})
         else:
@@ -114,9 +113,6 @@ def units_of(names) -> dict:
     (:func:`vtb.metric_unit`), a metric's uncontrolled value ``<metric>_0`` (its unit),
     reduction rates ``eta_*`` and the robust studies' ratios X/X0 ``ratio_*``, ``mean_*``,
     ``sem_*`` (–); others (text, flags) are left out."""
-    from ..errors import ConfigError
-    from .simulate import metric_unit
-
     def unit(name):
         try:
             return metric_unit(name)

@@ -36,7 +36,7 @@ from ..errors import VtbError, config_error, stale_file_error
 from ..config.presets import tids_around
 from ..run.scaleout import run_cases
 from ..run.simulate import Result, simulate
-from .grid import _with_tids, get_field, index_names, set_field
+from .grid import with_tids, get_field, index_names, set_field
 from .journal import same_config
 from ..article.tid_sweep import METRICS, REFERENCE, SweepResult, case_config, config_stamp, read_journal
 
@@ -212,7 +212,7 @@ def _problem_spec(config: Config, variables, objectives, constraints, reference)
         raise config_error("variables", variables, "must be a non-empty mapping {field path: (low, high, 'log' | 'linear')}")
     spec = []
     for path, bounds in variables.items():
-        get_field(_with_tids(config, path), path)
+        get_field(with_tids(config, path), path)
         if not isinstance(bounds, (tuple, list)) or len(bounds) not in (2, 3):
             raise config_error(f"variables[{path!r}]", bounds, "must be (low, high) or (low, high, 'log' | 'linear')")
         lo, hi, scale = (*bounds, "linear") if len(bounds) == 2 else bounds
@@ -287,7 +287,7 @@ def _optimize_fields(config, variables, objectives, constraints, reference, repo
     paths = tuple(p for p, *_ in spec)
     base = config
     if any(p.startswith("tids") for p in paths) and config.tids is None:
-        base = _with_tids(config, next(p for p in paths if p.startswith("tids")))
+        base = with_tids(config, next(p for p in paths if p.startswith("tids")))
     record = tuple(dict.fromkeys([*objectives, *(m for m, _ in cons), *(report or ())]))
     names = index_names(config)
     for m in record:
