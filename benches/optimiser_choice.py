@@ -99,7 +99,7 @@ def stopped_at(history, tol: float, window: int):
     have stopped a run of this history, or ``None`` within the recorded generations."""
     hv = [h for _, h in history]
     for g in range(window + 1, len(hv) + 1):
-        if vtb.optim.minimize.hypervolume_settled(hv[:g], tol, window):
+        if vtb.optim.hypervolume_settled(hv[:g], tol, window):
             return g, history[g - 1][0], hv[g - 1]
     return None
 
@@ -127,7 +127,7 @@ def report(out: Path, runs: list, n_seeds: int) -> None:
     from vtb.analysis.plotting import plot_hypervolume
 
     runs = sorted(runs, key=lambda r: (r["start"], r["seed"]))
-    hists = {f"{s} start": [[vtb.optim.minimize.Generation(gen=i + 1, n_evals=n, n_feasible=0, n_front=0, cv_min=0.0, hypervolume=hv) for i, (n, hv) in enumerate(r["history"])]
+    hists = {f"{s} start": [[vtb.optim.Generation(gen=i + 1, n_evals=n, n_feasible=0, n_front=0, cv_min=0.0, hypervolume=hv) for i, (n, hv) in enumerate(r["history"])]
                             for r in runs if r["start"] == s] for s in STARTS}
     fig = plot_hypervolume({k: v for k, v in hists.items() if v})
     for suffix in ("png", "pdf"):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb.optim import minimize as moga
+from vtb import optim as moga
 from vtb.run import scaleout
 from vtb.config.presets import ARTICLE_RAIL_ACC
 

@@ -1,7 +1,7 @@
-"""Deprecated path: the module is :mod:`vtb.optim.minimize`; this alias goes in the next release."""
+"""Deprecated path: the module is :mod:`vtb.optim`; this alias goes in the next release."""
 
 import sys
 
 from ._moved import moved
 
-sys.modules[__name__] = moved(__name__, "vtb.optim.minimize")
+sys.modules[__name__] = moved(__name__, "vtb.optim")

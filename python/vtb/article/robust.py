@@ -29,7 +29,7 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from ..studies import journal as jr
-from ..optim import minimize as moga
+from .. import optim as moga
 from . import tid_sweep
 from ..config.fields import Config, TIDs
 from ..errors import VtbError, config_error

@@ -22,7 +22,7 @@ from typing import Optional
 
 from ..config.fields import Config
 from ..errors import ConfigError, config_error, stale_file_error
-from ..optim.minimize import write_atomically
+from ..optim.checkpoint import write_atomically
 
 FORMAT = 1
 _STAMP = "# vtb sweep journal "

@@ -30,7 +30,7 @@ from typing import Optional, Union
 
 import numpy as np
 
-from ..optim import minimize as moga
+from .. import optim as moga
 from ..config.fields import Config
 from ..errors import VtbError, config_error, stale_file_error
 from ..config.presets import tids_around
