@@ -19,7 +19,7 @@ import numpy as np
 
 import vtb
 from vtb.run.scaleout import local_cluster
-from vtb.article.tid_sweep import COLUMNS
+from vtb.article.tid_problem import COLUMNS
 
 
 def study(cfg, samples, executor=None, threads=None):

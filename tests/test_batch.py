@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb.article.tid_sweep import case_config
+from vtb.article.tid_problem import case_config
 
 
 @pytest.fixture(scope="module")

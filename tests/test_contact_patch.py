@@ -61,7 +61,7 @@ def test_lockstep_jobs_on_patches_give_the_bits_of_single_runs():
     # The patch's port vectors are shared by the lanes of a batch (the patch of the static
     # load): jobs with different dampers and samples give bit for bit their single runs, and
     # their band-limited indices too.
-    from vtb.article.tid_sweep import case_config
+    from vtb.article.tid_problem import case_config
 
     base = converged_short(True, t_end=0.01)
     base.output.band_limit = 2000.0

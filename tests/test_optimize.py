@@ -33,7 +33,7 @@ def test_pareto_set_is_feasible_non_dominated_and_in_bounds(result):
 
 def test_pareto_metrics_are_those_of_a_fresh_run(short, result):
     c = result.chosen("best η_r")
-    cfg = vtb.article.tid_sweep.case_config(short, c["b_t"], c["k_t"], c["c_t"])
+    cfg = vtb.article.tid_problem.case_config(short, c["b_t"], c["k_t"], c["c_t"])
     m = vtb.simulate(cfg).metrics()
     i = result.trade_offs()["best η_r"]
     assert result.pareto["rail_acc_max"][i] == m["rail_acc_max"]
@@ -69,7 +69,8 @@ import sys
 from vtb import cli
 
 from vtb.article import reproduce
-from vtb.studies.optimize import tid_objectives, warm_start_points
+from vtb.article.tid_optimize import warm_start_points
+from vtb.article.tid_problem import tid_objectives
 
 OPT = sys.modules["vtb.studies.optimize"]  # the module (vtb.optimize is the function)
 
@@ -230,7 +231,7 @@ def test_a_warm_start_does_not_depend_on_the_journals_line_order(short, result, 
     stamp, header, rows = lines[0], lines[1], lines[2:]
     shuffled = tmp_path / "shuffled.csv"
     shuffled.write_text("\n".join([stamp, header, *rows[::-1]]) + "\n")
-    in_order = warm_start_points(vtb.article.tid_sweep.read_journal(swept), short, result.baseline)
+    in_order = warm_start_points(vtb.article.tid_problem.read_journal(swept), short, result.baseline)
     reversed_ = warm_start_points(shuffled, short, result.baseline)
     for a, b in zip(in_order[:3], reversed_[:3]):
         assert np.array_equal(a, b)
@@ -247,7 +248,7 @@ def test_warm_started_optimisation_uses_the_sweep(short, swept, monkeypatch):
     assert a.moga.history[0].n_evals == 2 and calls[0] == 2 and a.moga.n_evals == 2 + 6
     assert np.any((a.pareto["k_t"] == 1e8) & (a.pareto["c_t"] == 1e3))  # a sweep case on the front
     assert sum(calls) == a.moga.n_evals
-    b = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=vtb.article.tid_sweep.read_journal(swept))
+    b = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=vtb.article.tid_problem.read_journal(swept))
     _same_optimisation(a, b)
 
 
@@ -269,7 +270,7 @@ def test_a_journal_computed_by_other_numerics_is_stale(short, swept):
     """A journal whose uncontrolled run no longer equals a fresh one (written by another vtb
     version) is a StaleFileError naming the journal, which --force sets aside and reruns; the
     same sweep held in memory only is a plain ConfigError."""
-    sw = vtb.article.tid_sweep.read_journal(swept)
+    sw = vtb.article.tid_problem.read_journal(swept)
     assert sw.journal == str(swept)
     sw.columns["rail_acc_max"][0] *= 1.0 + 1e-12  # the baseline of other numerics
     with pytest.raises(vtb.StaleFileError, match="differs") as e:
@@ -304,7 +305,7 @@ def test_reproduction_records_hypervolume_against_evaluations(short, swept, tmp_
     evaluations and hypervolume of each run, the warm run's first generation free."""
     import csv
 
-    sw = vtb.article.tid_sweep.read_journal(swept)
+    sw = vtb.article.tid_problem.read_journal(swept)
     runs = reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), seed=0, optimiser="both", progress=False)
     with open(tmp_path / "optimisation_history.csv") as f:
         rows = list(csv.DictReader(f))

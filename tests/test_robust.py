@@ -163,7 +163,7 @@ def test_robust_studies_refuse_what_they_cannot_do():
 
 
 def test_the_timoshenko_pinned_pinned_frequency_is_the_beam_equations_root():
-    from vtb.article.tid_sweep import pinned_pinned_frequency
+    from vtb.config.resolution import pinned_pinned_frequency
 
     article, conv = vtb.paper_config(), vtb.paper_config(model="converged")
     f_eb, f_t = pinned_pinned_frequency(article), pinned_pinned_frequency(conv)

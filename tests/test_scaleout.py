@@ -12,7 +12,7 @@ import pytest
 
 import vtb
 from vtb.run import scaleout
-from vtb.article.tid_sweep import COLUMNS, read_journal
+from vtb.article.tid_problem import COLUMNS, read_journal
 
 distributed = pytest.importorskip("dask.distributed")
 

@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 import vtb
 from conftest import short_case
 from vtb.studies import grid as studies_mod
-from vtb.studies.optimize import ARTICLE_CONSTRAINTS, ARTICLE_OBJECTIVES, ARTICLE_VARIABLES
-from vtb.article.tid_sweep import METRICS
+from vtb.article.tid_problem import ARTICLE_CONSTRAINTS, ARTICLE_VARIABLES
+from vtb.run.indices import ARTICLE_OBJECTIVES, METRICS
 
 
 @pytest.fixture(scope="module")

@@ -264,7 +264,7 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     group: the finished cases are journaled, the resume runs only the others, and the result
     equals an uninterrupted sweep's bit for bit."""
     from vtb.run import scaleout
-    from vtb.article import tid_sweep
+    from vtb.article import tid_problem
 
     c = one_span()
     c.solver.t_end = 0.02
@@ -292,7 +292,7 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     ran.clear()
     resumed = vtb.sweep(c, **grid, out=out, progress=False, threads=1)
     assert sum(ran) == len(reference) - journaled
-    for k in tid_sweep.COLUMNS:
+    for k in tid_problem.COLUMNS:
         a, b = reference.columns[k], resumed.columns[k]
         assert (list(a) == list(b)) if k == "error" else np.array_equal(a, b, equal_nan=True), k
 

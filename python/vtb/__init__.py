@@ -43,12 +43,14 @@ from .config.prepare import irregularity_profile
 from .run.indices import metric_unit
 from .run.simulate import Result, assembled_matrices, load, simulate, simulate_batch
 from .studies.grid import StudyResult, get_field, index_names, set_field, study
-from .article.tid_sweep import SweepResult, pinned_pinned_frequency, sweep
+from .article.tid_problem import OptimizationResult, SweepResult
+from .article.tid_sweep import pinned_pinned_frequency, sweep
 from .analysis.track import Modes, decay_rate, deck_band, modes, receptance
 from .config.spans import spans
 from .config.trains import TrainInfo, consist_extent, train, trains
 from .config.zones import bridge_extent, track_zones
-from .studies.optimize import OptimizationResult, ParetoResult, optimize
+from .article.tid_optimize import optimize
+from .studies.optimize import ParetoResult
 from .article.robust import DesignEvaluation, evaluate_design, evaluate_designs
 from .run.tables import metrics_table, read_parquet, to_parquet
 

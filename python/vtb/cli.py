@@ -291,7 +291,7 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_optimize(args) -> int:
-    from .studies.optimize import optimize
+    from .article.tid_optimize import optimize
 
     check_config_file(args.config)
     if args.out:

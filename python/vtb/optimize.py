@@ -1,7 +1,7 @@
-"""Deprecated path: the module is :mod:`vtb.studies.optimize`; this alias goes in the next release."""
+"""Deprecated path: the module is :mod:`vtb.article.tid_optimize`; this alias goes in the next release."""
 
 import sys
 
 from ._moved import moved
 
-sys.modules[__name__] = moved(__name__, "vtb.studies.optimize")
+sys.modules[__name__] = moved(__name__, "vtb.article.tid_optimize")

@@ -24,7 +24,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import config_error
-from ..studies.optimize import optimize
+from .tid_optimize import optimize
 from ..config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config, tids_around
 from ..run.simulate import simulate
 from .tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, pinned_pinned_frequency, sweep, sweep_report

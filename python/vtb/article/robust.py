@@ -19,8 +19,8 @@ N: it halves when N quadruples.
 
 from __future__ import annotations
 
-import dataclasses
 import contextlib
+import dataclasses
 import math
 import re
 from pathlib import Path
@@ -28,23 +28,22 @@ from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from ..studies import journal as jr
-from .. import optim as moga
-from . import tid_sweep
 from ..config.fields import Config, TIDs
-from ..errors import VtbError, config_error
-from ..studies.optimize import CONSTRAINTS, DesignJournal, OptimizationResult, checkpoint_identity, tid_problem
 from ..config.presets import tids_around
+from ..errors import VtbError, config_error
+from ..run.indices import A_RM, ARTICLE_OBJECTIVES, CONSTRAINTS, METRICS, RAIL_RATE, REDUCED
 from ..run.scaleout import run_all, run_cases
+from ..run.tables import frame, to_parquet, units_of
+from ..studies import journal as jr
 from ..studies.grid import result_of
-from .tid_sweep import METRICS, case_config, config_stamp
+from ..studies.journal import config_stamp
+from ..studies.optimize import DesignEvaluator, DesignJournal, checkpoint_identity
+from .tid_problem import LAYOUT, OptimizationResult, Setup, SweepResult, case_config, case_rows, plan, recording_metrics, with_dampers
 
 #: First seed of the samples a design is chosen on.
 DESIGN_SEED0 = 1000
 #: First seed of the held-out samples a design is checked on.
 HELD_OUT_SEED0 = 2000
-#: Indices whose reduction rate η = (X0 − X)/X0 is reported (the rest are counts or signed).
-REDUCED = tuple(m for m in METRICS if m not in ("contact_force_min", "contact_loss_events"))
 
 _QUANTILE = re.compile(r"^p(\d+(?:\.\d+)?)$")
 
@@ -107,7 +106,7 @@ def cases(config: Config, samples, speeds: Optional[Sequence[float]], first: int
             cfg.speed = float(v)
             cfg.irregularity = dataclasses.replace(cfg.irregularity, seed=s)
             cfg.tids = None
-            out.append((float(v), s, tid_sweep.recording_metrics(cfg)))
+            out.append((float(v), s, recording_metrics(cfg)))
     return out
 
 
@@ -172,7 +171,7 @@ def robust_objectives(rows: list, statistic_name: str) -> tuple:
     s = design_statistics(rows, statistic_name)
     if any(r["error"] for r in rows):
         return [10.0, 10.0], [math.inf] * len(CONSTRAINTS)
-    return [s["ratio_rail_acc_max"], s["ratio_slab_acc_max"]], [s[f"ratio_{m}"] - 1.0 for m in CONSTRAINTS]
+    return [s[f"ratio_{m}"] for m in ARTICLE_OBJECTIVES], [s[f"ratio_{m}"] - 1.0 for m in CONSTRAINTS]
 
 
 def _rows_table(designs: list, rows_of: list, statistic_name: str, speed: Optional[float]) -> dict:
@@ -197,7 +196,7 @@ def _best_of(table: dict) -> dict:
         raise VtbError("no design was evaluated")
     ok = np.flatnonzero(table["feasible"])
     pool = ok if ok.size else np.arange(len(table["b_t"]))
-    i = int(pool[np.argmin(table["ratio_rail_acc_max"][pool])])
+    i = int(pool[np.argmin(table[f"ratio_{A_RM}"][pool])])
     return {k: (bool(v[i]) if k == "feasible" else float(v[i])) for k, v in table.items()}
 
 
@@ -238,16 +237,12 @@ class DesignEvaluation:
 
     def to_pandas(self):
         """One row per case, units in ``attrs["units"]`` (needs pandas)."""
-        from ..run.tables import frame, units_of
-
         df = frame(self.rows)
         df.attrs["units"] = units_of(df.columns)
         return df
 
     def to_parquet(self, path) -> None:
         """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
-        from ..run.tables import to_parquet
-
         to_parquet(self.to_pandas(), path)
 
 
@@ -351,15 +346,11 @@ class RobustSweep:
 
     def to_pandas(self, statistic_name: Optional[str] = None, speed: Optional[float] = None):
         """:meth:`table` as a DataFrame, one row per design, units in ``attrs["units"]``."""
-        from ..run.tables import frame, units_of
-
         t = self.table(statistic_name, speed)
         return frame(t, units_of(t))
 
     def to_parquet(self, path, statistic_name: Optional[str] = None, speed: Optional[float] = None) -> None:
         """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
-        from ..run.tables import to_parquet
-
         to_parquet(self.to_pandas(statistic_name, speed), path)
 
 
@@ -373,7 +364,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
     (:mod:`vtb.scaleout`): one batch, not one per speed, so that the groups of all speeds
     share out the cores or workers evenly. A case is journaled as soon as it is known."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
-    config, grid_cases = tid_sweep.plan(config, b_t, k_t, c_t)
+    config, grid_cases = plan(config, b_t, k_t, c_t)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
     out_dir = None if out is None else Path(out)
     bar, report = None, progress if callable(progress) else None
@@ -386,8 +377,8 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 out_dir.mkdir(parents=True, exist_ok=True)
                 journal = out_dir / f"v{v:g}_seed{s}.csv"
                 stack.enter_context(jr.lock(journal))
-                known = jr.open_rows(journal, cfg, tid_sweep.LAYOUT)
-            rows, left = jr.reuse(known, grid_cases, tid_sweep.LAYOUT)
+                known = jr.open_rows(journal, cfg, LAYOUT)
+            rows, left = jr.reuse(known, grid_cases, LAYOUT)
             state.append([v, s, cfg, journal, rows, left])
         total = len(todo) * len(grid_cases)
         done = total - sum(len(st[5]) for st in state)
@@ -401,9 +392,9 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
             # each case's row journaled as soon as its lockstep group finishes
             nonlocal done
             st, case = jobs[i]
-            row = tid_sweep.case_rows([case], [r])
+            row = case_rows([case], [r])
             if st[3] is not None:
-                jr.append(st[3], row, tid_sweep.LAYOUT)
+                jr.append(st[3], row, LAYOUT)
             st[4].extend(row)
             done += 1
             if bar is not None:
@@ -412,16 +403,16 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 report(done, total)
 
         run_cases([case_config(st[2], c["b_t"], c["k_t"], c["c_t"]) for st, c in jobs], finished, executor=executor, threads=threads, chunk=chunk)
-    return RobustSweep([(v, s, result_of(rows, cfg, tid_sweep.LAYOUT, tid_sweep.SweepResult, journal=j)) for v, s, cfg, j, rows, _ in state], statistic_name, config)
+    return RobustSweep([(v, s, result_of(rows, cfg, LAYOUT, SweepResult, journal=j)) for v, s, cfg, j, rows, _ in state], statistic_name, config)
 
 
 # ---------------------------------------------------------------------- robust optimisation
 @dataclasses.dataclass
-class RobustObjectives:
-    """A generation's evaluation over samples and speeds (picklable): X rows (b_t, k_t, c_t)
-    → :func:`robust_objectives`. Every design runs on every case, all in one batch;
-    ``designs`` keeps each design's case rows and journals a design as soon as all its cases
-    finished, so a resumed optimisation runs no design its interrupted run finished."""
+class RobustEvaluator(DesignEvaluator):
+    """The robust evaluation (picklable): a design (b_t, k_t, c_t) runs on every case of
+    ``todo`` (every design of a generation in one batch), its rows are the cases' rows against
+    their uncontrolled ``baselines`` (:func:`_run_row`) and its F and G are
+    :func:`robust_objectives` of them with ``statistic``."""
 
     config: Config
     todo: list
@@ -430,12 +421,10 @@ class RobustObjectives:
     threads: Optional[int] = None
     designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
     executor: object = None
+    n_obj = len(ARTICLE_OBJECTIVES)
+    n_constr = len(CONSTRAINTS)
 
-    @property
-    def cache(self) -> dict:
-        return self.designs.cache
-
-    def _configs(self, x) -> list:
+    def configs_of(self, x) -> list:
         out = []
         for _, _, cfg in self.todo:
             c = cfg.copy()
@@ -443,14 +432,11 @@ class RobustObjectives:
             out.append(case_config(c, *x))
         return out
 
-    def __call__(self, X: np.ndarray):
-        X = np.asarray(X, dtype=float)
-        self.designs.run(X, self._configs, lambda k, r: _run_row(self.todo[k][0], self.todo[k][1], self.baselines[k], r), self.threads,
-                         self.executor)
-        F, G = np.empty((len(X), 2)), np.empty((len(X), len(CONSTRAINTS)))
-        for i, x in enumerate(X):
-            F[i], G[i] = robust_objectives(self.cache[tuple(x)], self.statistic)
-        return F, G
+    def row_of(self, k: int, result) -> dict:
+        return _run_row(self.todo[k][0], self.todo[k][1], self.baselines[k], result)
+
+    def score(self, rows: list) -> tuple:
+        return robust_objectives(rows, self.statistic)
 
 
 @dataclasses.dataclass
@@ -464,7 +450,7 @@ class RobustOptimizationResult(OptimizationResult):
 
     statistic: str = "mean"
     evaluated: dict = dataclasses.field(default_factory=dict)
-    objective_columns = ("ratio_rail_acc_max", "ratio_slab_acc_max")
+    objective_columns = tuple(f"ratio_{m}" for m in ARTICLE_OBJECTIVES)
 
     def table(self) -> list:
         """One row per trade-off choice: the design and its statistics."""
@@ -509,24 +495,22 @@ def _pareto_columns(X: np.ndarray, rows_of: list, statistic_name: str) -> dict:
     pareto.pop("feasible", None)
     for m in REDUCED:
         pareto[f"eta_{m}"] = 1.0 - pareto[f"ratio_{m}"]
-    pareto["eta_r"] = (pareto["eta_rail_acc_max"] + pareto["eta_rail_acc_rms"] + pareto["eta_rail_acc_settle"]) / 3.0
-    order = np.argsort(pareto["ratio_rail_acc_max"])
+    a, b, c = (pareto[f"eta_{m}"] for m in RAIL_RATE)
+    pareto["eta_r"] = (a + b + c) / 3.0
+    order = np.argsort(pareto[f"ratio_{A_RM}"])
     return {k: v[order] for k, v in pareto.items()}
 
 
-def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mean", pop_size: int, n_gen: int,
-                  seed: int, algorithm: str, threads, progress, warm_start, stop_hv, checkpoint, executor=None, **options) -> RobustOptimizationResult:
-    """:func:`vtb.optimize` over samples and speeds (what it calls when given ``samples`` or
-    ``speeds``). Objectives and constraints: :func:`robust_objectives`; hypervolumes with the
-    reference point (1, 1), the uncontrolled level of both objectives. ``warm_start``: a
-    :class:`RobustSweep` of the same configuration and cases; its uncontrolled runs are then
-    the baselines (the same deterministic runs, not repeated) and its designs the points the
-    first population is chosen from. ``checkpoint``: as :func:`vtb.optimize`, with the case rows
-    of every evaluated design kept beside it in ``<checkpoint>.designs.jsonl``."""
+def setup(config: Config, samples, speeds, statistic_name: str, warm_start, threads: Optional[int], executor, checkpoint) -> Setup:
+    """The article's problem over samples and speeds (what :func:`vtb.optimize` solves when given
+    ``samples`` or ``speeds``): the :class:`RobustEvaluator` of the cases (design seeds
+    :data:`DESIGN_SEED0` + i at each speed) against their uncontrolled runs, hypervolumes with
+    the reference point (1, 1), the uncontrolled level of both objectives. ``warm_start``: a
+    :class:`RobustSweep` of the same configuration and cases; its uncontrolled runs are then the
+    baselines (the same deterministic runs, not repeated) and its designs the points the first
+    population is chosen from."""
     statistic([1.0], statistic_name)
-    if config.tids is None:
-        config = config.copy()
-        config.tids = tids_around(config)
+    config = with_dampers(config)
     todo = cases(config, samples, speeds, DESIGN_SEED0)
     if warm_start is not None and not isinstance(warm_start, RobustSweep):
         raise config_error("warm_start", type(warm_start).__name__, "must be a RobustSweep (vtb.sweep with samples/speeds) for an optimisation over samples and speeds")
@@ -541,27 +525,21 @@ def optimize_over(config: Config, *, samples, speeds, statistic_name: str = "mea
                 raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
     identity = checkpoint_identity(config, baselines, checkpoint, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
-    journal = None if checkpoint is None else Path(str(checkpoint) + ".designs.jsonl")
-    evaluate = RobustObjectives(config, todo, baselines, statistic_name, threads, DesignJournal(journal), executor)
+    evaluator = RobustEvaluator(config, todo, baselines, statistic_name, threads, executor=executor)
     initial = None
     if warm_start is not None:
         X0 = np.array(warm_start.designs).reshape(-1, 3)
         FG = []
         for i, x in enumerate(X0):
             rows = warm_start._rows(i)
-            evaluate.cache[tuple(x)] = rows
+            evaluator.cache[tuple(x)] = rows
             FG.append(robust_objectives(rows, statistic_name))
         initial = (X0, np.array([f for f, _ in FG]).reshape(-1, 2), np.array([g for _, g in FG]).reshape(-1, len(CONSTRAINTS)))
-    evaluate.designs.load(identity)
-    problem = tid_problem(evaluate)
-    res = moga.minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=(1.0, 1.0),
-                        initial=initial, stop_hv=stop_hv, checkpoint=checkpoint, checkpoint_identity=identity, **options)
-    X = res.X[res.feasible] if np.any(res.feasible) else res.X[:0]
-    missing = [x for x in X if tuple(x) not in evaluate.cache]
-    if missing:
-        evaluate(np.array(missing))
-    pareto = _pareto_columns(X, [evaluate.cache[tuple(x)] for x in X], statistic_name)
-    return RobustOptimizationResult(
-        pareto=pareto, baseline={(v, s): b for (v, s, _), b in zip(todo, baselines)}, moga=res, config=config,
-        statistic=statistic_name, evaluated=dict(evaluate.cache),
-    )
+
+    def result(res, X, rows) -> RobustOptimizationResult:
+        return RobustOptimizationResult(
+            pareto=_pareto_columns(X, rows, statistic_name), baseline={(v, s): b for (v, s, _), b in zip(todo, baselines)}, moga=res,
+            config=config, statistic=statistic_name, evaluated=dict(evaluator.cache),
+        )
+
+    return Setup(evaluator, identity, (1.0, 1.0), initial, result)

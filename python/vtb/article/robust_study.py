@@ -31,14 +31,16 @@ from typing import Optional
 import numpy as np
 
 from . import reproduce
-from ..studies.optimize import optimize
+from .tid_optimize import optimize
 from ..config.fields import Irregularity
 from ..config.presets import PAPER_SEED, paper_config, tids_around
 from ..config.resolution import resolved_band
 from .robust import DESIGN_SEED0, HELD_OUT_SEED0, DesignEvaluation, evaluate_designs
 from ..run.scaleout import run_all
 from .reproduce import ARTICLE_CAR_ACC, ARTICLE_TABLE3_1
-from .tid_sweep import ARTICLE_BEST_RAIL_CUT, config_stamp, pinned_pinned_frequency, sweep
+from ..config.resolution import pinned_pinned_frequency
+from ..studies.journal import config_stamp
+from .tid_sweep import ARTICLE_BEST_RAIL_CUT, sweep
 from ..studies.journal import same_config
 from ..machine import describe
 
