@@ -14,10 +14,13 @@ resolve (:func:`vtb.resolved_band`).
 from __future__ import annotations
 
 import functools
+import warnings
 from typing import Optional, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
+
+from ..config.resolution import resolved_band
 
 #: Width of a journal's single column (mm), the width of every figure.
 COLUMN_MM = 85.0
@@ -153,10 +156,6 @@ def _resolved(result, layer: str) -> Optional[float]:
     config = getattr(result, "config", None)
     if config is None:
         return None
-    import warnings
-
-    from ..config.resolution import resolved_band
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         band = resolved_band(config).layers.get(layer)

@@ -23,7 +23,10 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import config_error
+from ..analysis.spectra import third_octave
+from ..config.fields import Config
+from ..errors import ConvergenceError, config_error
+from ..run.indices import A_RM
 from .tid_optimize import optimize
 from ..config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config, tids_around
 from ..run.simulate import simulate
@@ -51,6 +54,26 @@ ARTICLE_TABLE3_1 = dict(b_t=3.4464, k_t=1.1973e8, c_t=1750.5, rail_acc_max=840.4
 FIGURE_FORMATS = ("png", "pdf")
 
 
+def calibrate_irregularity(config: Config, target: float = ARTICLE_RAIL_ACC, rtol: float = 1e-3, max_iter: int = 12) -> float:
+    """The irregularity amplitude scale (relative to ``config.irregularity.scale``) at which the
+    first observation point's rail acceleration amplitude equals ``target`` (secant iteration
+    on the scale; the response is nearly proportional to it)."""
+    def amp(s):
+        c = config.copy()
+        c.irregularity.scale = config.irregularity.scale * s
+        return simulate(c).metrics()[A_RM]
+
+    s0, a0 = 0.0, amp(0.0)
+    s1 = 1.0
+    a1 = amp(s1)
+    for _ in range(max_iter):
+        if abs(a1 - target) <= rtol * target:
+            return s1
+        s0, a0, s1 = s1, a1, s1 + (target - a1) * (s1 - s0) / (a1 - a0)
+        a1 = amp(s1)
+    raise ConvergenceError(f"irregularity calibration did not reach {target} within {max_iter} runs (last {a1})")
+
+
 def _save(fig, out: Path, stem: str) -> str:
     """Writes ``fig`` as ``out/stem.png`` and ``.pdf``; returns the PNG's name."""
     for suffix in FIGURE_FORMATS:
@@ -66,7 +89,7 @@ def _write_csv(path: Path, rows: list) -> None:
 
 
 def _histories_figure(a, b, labels, out: Path, stem: str, layers=("rail", "slab")) -> None:
-    from ..analysis.plotting import plot_comparison
+    from ..analysis.plotting import plot_comparison  # needs matplotlib (the plot extra)
 
     _save(plot_comparison([a, b], labels, layers=layers), out, stem)
 
@@ -74,7 +97,7 @@ def _histories_figure(a, b, labels, out: Path, stem: str, layers=("rail", "slab"
 def _bands_figure(results, labels, out: Path) -> list:
     """Rail and slab one-third-octave levels of ``results``; returns the rows of the band table
     (centre frequency, then one level per run and layer)."""
-    from ..analysis.plotting import plot_third_octave
+    from ..analysis.plotting import plot_third_octave  # needs matplotlib (the plot extra)
 
     rows = {}
     for layer in ("rail", "slab"):
@@ -160,7 +183,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     t2 = sw.best_per_inertance()
     sweep_text = sweep_report(sw, out / "sweep.md", seconds=times["sweep"])
     _write_csv(out / "table2.csv", [{k: float(v[j]) for k, v in t2.items()} for j in range(len(t2["b_t"]))])
-    from ..analysis import plotting
+    from ..analysis import plotting  # needs matplotlib (the plot extra)
 
     _save(plotting.plot_rail_indices(t2, sw.baseline), out, "fig5_sweep_rail")
     _save(plotting.plot_slab_indices(t2, sw.baseline), out, "fig6_sweep_slab")
@@ -204,8 +227,6 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
 def _car_body_bands(res, chosen: dict) -> dict:
     """The car body's one-third-octave levels: the strongest band, and the band of the chosen
     TID's working frequency √(k_t/b_t)/2π."""
-    from ..analysis.spectra import third_octave
-
     b = third_octave(res.car_body_acc, 1.0 / res.config.solver.dt)
     f_t = math.sqrt(chosen["k_t"] / chosen["b_t"]) / (2 * math.pi)
     i_max = int(np.argmax(b["level"]))

@@ -332,7 +332,7 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
 
 
 def _figures(out: Path, ropt, designs, held, speeds) -> None:
-    from ..analysis import plotting
+    from ..analysis import plotting  # needs matplotlib (the plot extra)
 
     # The uncontrolled rail peak of every design case: the spread a design has to hold over.
     reproduce._save(plotting.plot_baselines(ropt.baseline), out, "fig_baselines")

@@ -27,7 +27,7 @@ from typing import Any, Literal, Optional, Union
 import numpy as np
 
 from ..errors import config_error
-from .irregularity import Irregularity
+from .irregularity import SPECTRA, Irregularity
 from . import gateway
 from .schema import StrictFields
 from .schema import default as _default
@@ -324,8 +324,6 @@ class Config(StrictFields):
         spectrum (the centre of its band v/λ on a log scale), 2π·v/λ for a corrugation
         (``wavelength``) or a dip (``length``); ``None`` when there is no wavelength."""
         irr = self.irregularity
-        from .irregularity import SPECTRA
-
         try:
             if irr.kind in SPECTRA:
                 lam = math.sqrt(irr.wavelength_min * irr.wavelength_max)

@@ -11,8 +11,10 @@ import math
 from typing import Optional, Sequence
 
 from . import gateway
+from ..errors import config_error
 from .fields import TIDs, Config, Coupling, Layer, MovingForce, Output, RayleighCoefficients, Solver, Structure, Vehicle
 from .irregularity import Irregularity
+from .trains import train
 
 #: Seed of the paper preset's irregularity sample.
 PAPER_SEED = 2025
@@ -68,8 +70,6 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
     of its cost; the first run builds the reduction (about two and a half minutes).
     """
     if model not in PAPER_MODELS:
-        from ..errors import config_error
-
         raise config_error("model", model, f"must be one of {PAPER_MODELS}")
     cfg = Config.from_dict(gateway.preset({"article": "paper", "converged": "paper_converged", "fast": "paper_fast"}[model]))
     cfg.irregularity = paper_irregularity(seed, PAPER_CALIBRATED_SCALE if calibrated else 1.0)
@@ -92,8 +92,6 @@ def tids_around(config: Config, inertance: float = 5.0, stiffness: float = 2e8, 
     1 kHz decays within a few metres along the fastened rail, so dampers beyond ±3 m of the
     observation point change the rail amplitude there by under 1 % (10 → 50 dampers) while
     each damper adds to every time step."""
-    from ..errors import config_error
-
     rail = config.structure.layers[0].name
     fast = next((c for c in config.structure.couplings if c.upper == rail and c.kind == "discrete"), None)
     if fast is None or len(fast.positions) < 2:
@@ -120,8 +118,6 @@ def tids_around(config: Config, inertance: float = 5.0, stiffness: float = 2e8, 
 
 def crh3_car(x_front: float, motor: bool = False) -> Vehicle:
     """A CRH3 car, parameter set A (trailer, or motor car), leading wheelset at ``x_front``."""
-    from .trains import train
-
     v = train("crh3", cars=2)[1 if motor else 0]  # the formation starts trailer, motor
     v.x_front = x_front
     return v
@@ -172,42 +168,15 @@ def moving_load_config(
         couplings = [Coupling("beam", "ground", "continuous", support_stiffness, support_damping)]
     elif supports == "discrete":
         if support_spacing is None:
-            from ..errors import config_error
-
             raise config_error("support_spacing", None, "needed for discrete supports")
         couplings = [Coupling.grid("beam", "ground", support_stiffness, support_damping, support_spacing, length)]
     else:
-        from ..errors import config_error
-
         raise config_error("supports", supports, "must be \"simply_supported\", \"winkler\" or \"discrete\"")
     layer = Layer("beam", density, area, youngs_modulus, inertia, modes, damping or RayleighCoefficients(0.0, 0.0))
     solver = Solver(initial_state=initial_state, t_end=t_end)
     if dt is not None:
         solver.dt = dt
     return Config(structure=Structure(length, [layer], couplings), speed=speed, forces=list(forces), solver=solver, output=Output(list(points)))
-
-
-def calibrate_irregularity(config: Config, target: float = ARTICLE_RAIL_ACC, rtol: float = 1e-3, max_iter: int = 12) -> float:
-    """The irregularity amplitude scale (relative to ``config.irregularity.scale``) at which the
-    first observation point's rail acceleration amplitude equals ``target`` (secant iteration
-    on the scale; the response is nearly proportional to it)."""
-    from ..errors import ConvergenceError
-    from ..run.simulate import simulate
-
-    def amp(s):
-        c = config.copy()
-        c.irregularity.scale = config.irregularity.scale * s
-        return simulate(c).metrics()["rail_acc_max"]
-
-    s0, a0 = 0.0, amp(0.0)
-    s1 = 1.0
-    a1 = amp(s1)
-    for _ in range(max_iter):
-        if abs(a1 - target) <= rtol * target:
-            return s1
-        s0, a0, s1 = s1, a1, s1 + (target - a1) * (s1 - s0) / (a1 - a0)
-        a1 = amp(s1)
-    raise ConvergenceError(f"irregularity calibration did not reach {target} within {max_iter} runs (last {a1})")
 
 
 def _example_files() -> dict:
@@ -232,8 +201,6 @@ def examples() -> dict:
 
 def example_text(name: str) -> str:
     """The TOML text of a shipped example (header comments included)."""
-    from ..errors import config_error
-
     files = _example_files()
     if name not in files:
         raise config_error("example", name, f"no such example; shipped: {', '.join(sorted(files))}")

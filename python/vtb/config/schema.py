@@ -11,6 +11,7 @@ import json
 from typing import Any
 
 from . import gateway
+from ..errors import config_error
 
 #: The JSON schema of the core's configuration (``$defs`` holds one entry per struct).
 SCHEMA: dict = gateway.schema()
@@ -67,8 +68,6 @@ class StrictFields:
     def __setattr__(self, name: str, value) -> None:
         fields = getattr(type(self), "__dataclass_fields__", None)
         if fields is not None and name not in fields:
-            from ..errors import config_error
-
             known = ", ".join(sorted(fields))
             raise config_error(self._field_path(name), value, f"{type(self).__name__} has no such field (known: {known})")
         object.__setattr__(self, name, value)
