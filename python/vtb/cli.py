@@ -20,7 +20,7 @@ from .config.gateway import __version__
 from .config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config, example_text, examples, paper_config, tids_around
 from .config.resolution import resolved_band
 from .errors import StaleFileError, VtbError, config_error
-from .run.indices import metric_unit
+from .run.indices import A_RM, A_SM, metric_unit, rate
 from .run.simulate import simulate
 from .studies.grid import study
 
@@ -165,11 +165,11 @@ def _describe(cfg, label: str) -> list[str]:
                 continue
             if not calibrated:
                 lines.append(f"# this is the raw spectrum level (×1). The article does not state its level; its published "
-                             f"rail_acc_max {ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}: "
+                             f"{A_RM} {ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}: "
                              f"vtb simulate --config article{'_converged' if model_name == 'converged' else ''}. No number below is the article's.")
             else:
                 published = ", ".join(f"{k} {v[0]:g}" for k, v in reproduce.ARTICLE_33.items())
-                lines.append(f"# the level ×{PAPER_CALIBRATED_SCALE} is fitted so that the article model's rail_acc_max is the article's "
+                lines.append(f"# the level ×{PAPER_CALIBRATED_SCALE} is fitted so that the article model's {A_RM} is the article's "
                              f"{ARTICLE_RAIL_ACC} m/s² (the one fitted number); the article publishes {published} (SI units), "
                              "out-of-sample comparisons" + (" for its hybrid model: this converged model differs by design (docs/validation.md)" if model_name == "converged" else ""))
     return lines
@@ -295,10 +295,10 @@ def cmd_optimize(args) -> int:
     h = res.moga.history[-1]
     print(f"# {res.moga.n_gen} generations, {res.moga.n_evals} evaluations ({res.moga.message}); hypervolume {h.hypervolume:.6g} (m/s²)² against (a_rm0, a_sm0)")
     rows = res.table()
-    print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline['rail_acc_max']:.2f}, a_sm0 = {res.baseline['slab_acc_max']:.3f} m/s²")
+    print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline[A_RM]:.2f}, a_sm0 = {res.baseline[A_SM]:.3f} m/s²")
     for r in rows:
         print(f"{r['choice']:<18} b_t {r['b_t']:.3f} kg  k_t {r['k_t']:.4g} N/m  c_t {r['c_t']:.4g} N·s/m  "
-              f"a_rm {r['rail_acc_max']:.2f} ({100 * r['eta_rail_acc_max']:+.2f} %)  a_sm {r['slab_acc_max']:.3f} ({100 * r['eta_slab_acc_max']:+.2f} %)  η_r {100 * r['eta_r']:+.2f} %")
+              f"a_rm {r[A_RM]:.2f} ({100 * r[rate(A_RM)]:+.2f} %)  a_sm {r[A_SM]:.3f} ({100 * r[rate(A_SM)]:+.2f} %)  η_r {100 * r['eta_r']:+.2f} %")
     if args.out:
         import csv
 

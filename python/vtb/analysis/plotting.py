@@ -21,6 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..config.resolution import resolved_band
+from ..run.indices import A_RM, A_RRMS, A_RST, A_SM, rate
 
 #: Width of a journal's single column (mm), the width of every figure.
 COLUMN_MM = 85.0
@@ -306,7 +307,7 @@ def plot_rail_indices(table: dict, baseline: dict, path=None) -> Figure:
     uncontrolled ``baseline``."""
     fig = figure(110.0)
     axes = fig.subplots(3, 1, sharex=True)
-    for i, (ax, key, sym, unit) in enumerate(zip(axes, ("rail_acc_max", "rail_acc_rms", "rail_acc_settle"),
+    for i, (ax, key, sym, unit) in enumerate(zip(axes, (A_RM, A_RRMS, A_RST),
                                                  ("a_{rm}", "a_{r\\mathrm{RMS}}", "a_{rst}"), ("m/s²", "m/s²", "s"))):
         ax.plot(table["b_t"], table[key], "o-", color="k", label="best case per $b_t$")
         ax.axhline(baseline[key], color="C0", ls="--", lw=0.8, label="uncontrolled")
@@ -323,9 +324,9 @@ def plot_slab_indices(table: dict, baseline: dict, path=None) -> Figure:
     inertance, against the uncontrolled ``baseline``."""
     fig = figure(55.0)
     ax = fig.subplots()
-    ax.plot(table["b_t"], table["slab_acc_max"], "o-", color="k", label="$a_{sm}$ at the rail optimum")
+    ax.plot(table["b_t"], table[A_SM], "o-", color="k", label="$a_{sm}$ at the rail optimum")
     ax.plot(table["b_t"], table["slab_acc_min"], "s--", color="C1", label="minimum $a_{sm}$ per $b_t$")
-    ax.axhline(baseline["slab_acc_max"], color="C0", ls=":", lw=0.8, label="uncontrolled $a_{sm}^0$")
+    ax.axhline(baseline[A_SM], color="C0", ls=":", lw=0.8, label="uncontrolled $a_{sm}^0$")
     ax.set_xlabel("inertance $b_t$ (kg)")
     ax.set_ylabel("slab amplitude $a_{sm}$ (m/s²)")
     ax.grid(True, alpha=0.3)
@@ -359,11 +360,11 @@ def plot_pareto(population, pareto: dict, baseline: dict, reference: Optional[tu
     fig = figure(62.0)
     ax = fig.subplots()
     ax.scatter(population[:, 0], population[:, 1], s=5, c="0.7", lw=0, label="final population")
-    ax.plot(pareto["rail_acc_max"], pareto["slab_acc_max"], "o", color="k", ms=3, label="Pareto set")
+    ax.plot(pareto[A_RM], pareto[A_SM], "o", color="k", ms=3, label="Pareto set")
     if reference is not None:
         ax.plot([reference[0]], [reference[1]], "*", color="C3", ms=8, label="article, solution 1")
-    ax.axvline(baseline["rail_acc_max"], color="C0", ls="--", lw=0.8, label="uncontrolled $a_{rm}^0$")
-    ax.axhline(baseline["slab_acc_max"], color="C0", ls=":", lw=0.8, label="uncontrolled $a_{sm}^0$")
+    ax.axvline(baseline[A_RM], color="C0", ls="--", lw=0.8, label="uncontrolled $a_{rm}^0$")
+    ax.axhline(baseline[A_SM], color="C0", ls=":", lw=0.8, label="uncontrolled $a_{sm}^0$")
     ax.set_xlabel("rail amplitude $a_{rm}$ (m/s²)")
     ax.set_ylabel("slab amplitude $a_{sm}$ (m/s²)")
     ax.grid(True, alpha=0.3)
@@ -377,7 +378,7 @@ def plot_baselines(baselines: dict, path=None) -> Figure:
     fig = figure(50.0)
     ax = fig.subplots()
     for (v, _), b in baselines.items():
-        ax.plot(v, b["rail_acc_max"], "o", color="k", ms=3, alpha=0.7)
+        ax.plot(v, b[A_RM], "o", color="k", ms=3, alpha=0.7)
     ax.set_xlabel("speed $v$ (m/s)")
     ax.set_ylabel("uncontrolled $a_{rm}^0$ (m/s²)")
     ax.grid(True, alpha=0.3)
@@ -390,9 +391,9 @@ def plot_robust_designs(table: dict, chosen: dict, path=None) -> Figure:
     standard errors, the ``chosen`` one marked."""
     fig = figure(62.0)
     ax = fig.subplots()
-    ax.errorbar(table["mean_rail_acc_max"], table["mean_slab_acc_max"], xerr=table["sem_rail_acc_max"], yerr=table["sem_slab_acc_max"],
+    ax.errorbar(table[f"mean_{A_RM}"], table[f"mean_{A_SM}"], xerr=table[f"sem_{A_RM}"], yerr=table[f"sem_{A_SM}"],
                 fmt="o", ms=2.5, lw=0.6, color="0.55", label="evaluated designs (mean ± s.e.)")
-    ax.plot([chosen["mean_rail_acc_max"]], [chosen["mean_slab_acc_max"]], "*", color="C3", ms=9, label="robust optimum (all speeds)")
+    ax.plot([chosen[f"mean_{A_RM}"]], [chosen[f"mean_{A_SM}"]], "*", color="C3", ms=9, label="robust optimum (all speeds)")
     ax.axvline(1.0, color="k", ls="--", lw=0.8, label="uncontrolled")
     ax.axhline(1.0, color="k", ls=":", lw=0.8)
     ax.set_xlabel("$a_{rm}/a_{rm}^0$ over the cases (–)")
@@ -405,11 +406,11 @@ def plot_robust_designs(table: dict, chosen: dict, path=None) -> Figure:
 @styled
 def plot_held_out(series: dict, speeds: Sequence[float], path=None) -> Figure:
     """Reduction rates per speed on held-out samples, mean ± standard error: ``series`` is
-    ``{design: {"eta_rail_acc_max": [(mean, sem) per speed], "eta_slab_acc_max": …}}``."""
+    ``{design: {rate(A_RM): [(mean, sem) per speed], rate(A_SM): …}}``."""
     fig = figure(95.0)
     axes = fig.subplots(2, 1, sharex=True)
     v = np.asarray(speeds, float)
-    for ax, key, sym in zip(axes, ("eta_rail_acc_max", "eta_slab_acc_max"), ("a_{rm}", "a_{sm}")):
+    for ax, key, sym in zip(axes, (rate(A_RM), rate(A_SM)), ("a_{rm}", "a_{sm}")):
         for j, (label, s) in enumerate(series.items()):
             ms = np.asarray(s[key], float)
             ax.errorbar(v + (j - 0.5) * 1.2, 100 * ms[:, 0], yerr=100 * ms[:, 1], marker="o" if j == 0 else "s", ms=3, capsize=2,

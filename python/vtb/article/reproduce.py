@@ -26,7 +26,7 @@ import numpy as np
 from ..analysis.spectra import third_octave
 from ..config.fields import Config
 from ..errors import ConvergenceError, config_error
-from ..run.indices import A_RM
+from ..run.indices import A_CM, A_RM, A_RRMS, A_RST, A_SM, D_CM, D_RM, D_SM, F_MAX, LOSS, rate
 from .tid_optimize import optimize
 from ..config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config, tids_around
 from ..run.simulate import simulate
@@ -44,10 +44,11 @@ STOP_HV = (1e-3, 10)
 #: docs/optimiser-choice/ (``python benches/optimiser_choice.py``; a test holds them equal).
 DEFAULT_OPTIMISER = "warm"
 
-ARTICLE_33 = {"rail_disp_max": (0.9663e-3, 0.9621e-3), "rail_acc_max": (1005.6, 994.2), "slab_disp_max": (0.4645e-3, 0.4456e-3), "slab_acc_max": (43.9355, 42.3621)}
+ARTICLE_33 = {D_RM: (0.9663e-3, 0.9621e-3), A_RM: (1005.6, 994.2), D_SM: (0.4645e-3, 0.4456e-3), A_SM: (43.9355, 42.3621)}
 #: The article's car-body acceleration amplitude (m/s²), uncontrolled and with its MOGA solution.
 ARTICLE_CAR_ACC = (0.2244, 0.1178)
-ARTICLE_TABLE3_1 = dict(b_t=3.4464, k_t=1.1973e8, c_t=1750.5, rail_acc_max=840.4, eta_rail_acc_max=0.1643, rail_acc_rms=62.24, eta_rail_acc_rms=0.0847, rail_acc_settle=1.0492, eta_rail_acc_settle=0.0283, eta_r=0.1245, slab_acc_max=41.53, eta_slab_acc_max=0.0547)
+ARTICLE_TABLE3_1 = {"b_t": 3.4464, "k_t": 1.1973e8, "c_t": 1750.5, A_RM: 840.4, rate(A_RM): 0.1643, A_RRMS: 62.24, rate(A_RRMS): 0.0847,
+                    A_RST: 1.0492, rate(A_RST): 0.0283, "eta_r": 0.1245, A_SM: 41.53, rate(A_SM): 0.0547}
 
 
 #: Every figure is written in these formats: a raster for the report, a vector file for print.
@@ -169,7 +170,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     # The evidence for the gaps: the raw level, and (full chain) the converged model.
     t0 = time.perf_counter()
     raw = paper_config(calibrated=False)
-    evidence = {"raw": simulate(raw).metrics(), "calibrated": dict(mh, contact_loss_events=len(hyb.contact_loss))}
+    evidence = {"raw": simulate(raw).metrics(), "calibrated": {**mh, LOSS: len(hyb.contact_loss)}}
     if not quick:
         conv = paper_config(calibrated=True, model="converged")
         evidence["converged"] = simulate(conv).metrics()
@@ -198,7 +199,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     table3 = opt.table() if len(opt) else []
     if table3:
         _write_csv(out / "table3.csv", table3)
-    reference = (ARTICLE_TABLE3_1["rail_acc_max"], ARTICLE_TABLE3_1["slab_acc_max"])
+    reference = (ARTICLE_TABLE3_1[A_RM], ARTICLE_TABLE3_1[A_SM])
     _save(plotting.plot_pareto(opt.moga.pop.F, opt.pareto, opt.baseline, reference), out, "fig7_pareto")
     car, bands, chosen = {}, [], None
     if len(opt):
@@ -211,7 +212,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
         bands = _bands_figure([unc, ctl], ["uncontrolled", "chosen TID"], out)
         _write_csv(out / "third_octave.csv", bands)
         mu, mc = unc.metrics(), ctl.metrics()
-        car = {k: (mu[k], mc[k], (mu[k] - mc[k]) / mu[k]) for k in ("car_disp_max", "car_acc_max")}
+        car = {k: (mu[k], mc[k], (mu[k] - mc[k]) / mu[k]) for k in (D_CM, A_CM)}
         evidence["car_bands"] = _car_body_bands(unc, chosen)
     _report(out, quick, cfg, rows33, sweep_text, runs, table3, car, times, plan, resumed, bands, evidence, sw, chosen)
     summary = dict(  # the chain's headline numbers, for studies built on it (vtb.robust_study)
@@ -301,23 +302,23 @@ def _report(out: Path, quick, cfg, rows33, sweep_text, runs, table3, car, times,
           "per generation in optimisation_history.csv, against evaluations in fig_hypervolume.png. Table 3 and the figures below come from the "
           + ("warm" if "warm" in runs else "cold") + " run.", "",
           "![hypervolume](fig_hypervolume.png)", "",
-          f"{len(opt)} feasible non-dominated solutions. Uncontrolled: a_rm0 = {opt.baseline['rail_acc_max']:.1f}, a_rRMS0 = {opt.baseline['rail_acc_rms']:.2f} m/s², "
-          f"a_rst0 = {opt.baseline['rail_acc_settle']:.4f} s, a_sm0 = {opt.baseline['slab_acc_max']:.2f} m/s² (article: 1005.6, ≈68.0, ≈1.080, ≈43.9).", "",
+          f"{len(opt)} feasible non-dominated solutions. Uncontrolled: a_rm0 = {opt.baseline[A_RM]:.1f}, a_rRMS0 = {opt.baseline[A_RRMS]:.2f} m/s², "
+          f"a_rst0 = {opt.baseline[A_RST]:.4f} s, a_sm0 = {opt.baseline[A_SM]:.2f} m/s² (article: 1005.6, ≈68.0, ≈1.080, ≈43.9).", "",
           "| choice | b_t (kg) | k_t (N/m) | c_t (N·s/m) | a_rm / η | a_rRMS / η | a_rst (s) / η | η_r | a_sm / reduction |",
           "|---|---|---|---|---|---|---|---|---|"]
     a = ARTICLE_TABLE3_1
     for r in table3 + [dict(a, choice="**article, solution 1**")]:
-        L.append(f"| {r['choice']} | {r['b_t']:.4g} | {r['k_t']:.4g} | {r['c_t']:.4g} | {r['rail_acc_max']:.1f} / {_pct(r['eta_rail_acc_max'])} | "
-                 f"{r['rail_acc_rms']:.2f} / {_pct(r['eta_rail_acc_rms'])} | {r['rail_acc_settle']:.4f} / {_pct(r['eta_rail_acc_settle'])} | {_pct(r['eta_r'])} | "
-                 f"{r['slab_acc_max']:.2f} / {_pct(r['eta_slab_acc_max'])} |")
+        L.append(f"| {r['choice']} | {r['b_t']:.4g} | {r['k_t']:.4g} | {r['c_t']:.4g} | {r[A_RM]:.1f} / {_pct(r[rate(A_RM)])} | "
+                 f"{r[A_RRMS]:.2f} / {_pct(r[rate(A_RRMS)])} | {r[A_RST]:.4f} / {_pct(r[rate(A_RST)])} | {_pct(r['eta_r'])} | "
+                 f"{r[A_SM]:.2f} / {_pct(r[rate(A_SM)])} |")
     L += ["", "![Fig. 7](fig7_pareto.png)", ""]
     if car:
         L += ["## The chosen solution (best η_r): Fig. 8 → fig8_histories.png, car body → fig_car_body.png", "",
               "The run fades the irregularity in over the first "
               f"{cfg.solver.fade_in:g} m (docs/model.md §4), so the car-body amplitudes below are those of the running car, not of a start-up impact.", "",
               "| car body | uncontrolled | chosen TID | reduction | article |", "|---|---|---|---|---|",
-              f"| displacement amplitude (mm) | {car['car_disp_max'][0] * 1e3:.4f} | {car['car_disp_max'][1] * 1e3:.4f} | {_pct(car['car_disp_max'][2])} | 1.160 → 0.9951 (−14.22 %) |",
-              f"| acceleration amplitude (m/s²) | {car['car_acc_max'][0]:.4f} | {car['car_acc_max'][1]:.4f} | {_pct(car['car_acc_max'][2])} | {ARTICLE_CAR_ACC[0]} → {ARTICLE_CAR_ACC[1]} ({_pct(ARTICLE_CAR_ACC[1] / ARTICLE_CAR_ACC[0] - 1)}) |",
+              f"| displacement amplitude (mm) | {car[D_CM][0] * 1e3:.4f} | {car[D_CM][1] * 1e3:.4f} | {_pct(car[D_CM][2])} | 1.160 → 0.9951 (−14.22 %) |",
+              f"| acceleration amplitude (m/s²) | {car[A_CM][0]:.4f} | {car[A_CM][1]:.4f} | {_pct(car[A_CM][2])} | {ARTICLE_CAR_ACC[0]} → {ARTICLE_CAR_ACC[1]} ({_pct(ARTICLE_CAR_ACC[1] / ARTICLE_CAR_ACC[0] - 1)}) |",
               "", "![Fig. 8](fig8_histories.png)", "", "![car body](fig_car_body.png)", ""]
     if bands:
         L += _frequency_text(bands)
@@ -358,22 +359,22 @@ def _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick) -> lis
     raw, cal = evidence["raw"], evidence["calibrated"]
     L = ["## The gaps between vtb and the article, and the evidence", ""]
     L.append(
-        f"**Rail displacement ({by['rail_disp_max']['vtb_hybrid'] * 1e3:.3f} mm against the article's 0.966 mm).** "
+        f"**Rail displacement ({by[D_RM]['vtb_hybrid'] * 1e3:.3f} mm against the article's 0.966 mm).** "
         f"The one calibrated number is the irregularity level, fitted to the rail acceleration. At the raw level (scale 1) "
-        f"the same model gives a rail amplitude of {raw['rail_disp_max'] * 1e3:.3f} mm and a slab amplitude of {raw['slab_disp_max'] * 1e3:.3f} mm "
-        f"with {raw['contact_loss_events']:.0f} contact-loss events; at the calibrated level the wheels lose contact "
-        f"{cal['contact_loss_events']:.0f} times and re-contact impacts add dynamic wheel load (contact force up to "
-        f"{cal['contact_force_max'] / 1e3:.0f} kN against the static 71.6 kN). One level cannot match both the article's "
+        f"the same model gives a rail amplitude of {raw[D_RM] * 1e3:.3f} mm and a slab amplitude of {raw[D_SM] * 1e3:.3f} mm "
+        f"with {raw[LOSS]:.0f} contact-loss events; at the calibrated level the wheels lose contact "
+        f"{cal[LOSS]:.0f} times and re-contact impacts add dynamic wheel load (contact force up to "
+        f"{cal[F_MAX] / 1e3:.0f} kN against the static 71.6 kN). One level cannot match both the article's "
         "rail acceleration and its rail displacement in vtb's model: the article's irregularity was probably not this "
         "spectrum at this level (docs/model-choices.md, \"Irregularity level of the reproduction\").")
     L.append("")
     conv = evidence.get("converged")
     conv_text = (f" The converged model (Timoshenko rail on fastener-resolving meshes, docs/validation.md) gives "
-                 f"{conv['slab_acc_max']:.2f} m/s² for the slab and {conv['rail_acc_max']:.0f} m/s² for the rail at the same level."
+                 f"{conv[A_SM]:.2f} m/s² for the slab and {conv[A_RM]:.0f} m/s² for the rail at the same level."
                  if conv else " (The full chain also runs the converged model here.)")
     L.append(
-        f"**Slab acceleration ({by['slab_acc_max']['vtb_hybrid']:.2f} m/s² hybrid, {by['slab_acc_max']['vtb_fem']:.2f} m/s² FEM, "
-        f"against the article's {by['slab_acc_max']['article_hybrid']:.2f} m/s²).** The slab's peak acceleration comes from "
+        f"**Slab acceleration ({by[A_SM]['vtb_hybrid']:.2f} m/s² hybrid, {by[A_SM]['vtb_fem']:.2f} m/s² FEM, "
+        f"against the article's {by[A_SM]['article_hybrid']:.2f} m/s²).** The slab's peak acceleration comes from "
         "frequencies above 0.5 kHz, where the article's modal slab (its sines stop near 0.6 kHz) and the 251-element "
         "mesh are not converged (docs/validation.md)." + conv_text +
         " vtb's slab is the full-width slab of Table 1 under one rail's share of the load; the article's damping and "
@@ -384,10 +385,10 @@ def _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick) -> lis
     t_last = (x_o - (v.x_front - v.length)) / cfg.speed
     b0 = sw.baseline
     L.append(
-        f"**Rail r.m.s. and stabilisation time (a_rRMS0 = {b0['rail_acc_rms']:.1f} m/s², a_rst0 = {b0['rail_acc_settle']:.3f} s, "
+        f"**Rail r.m.s. and stabilisation time (a_rRMS0 = {b0[A_RRMS]:.1f} m/s², a_rst0 = {b0[A_RST]:.3f} s, "
         "against ≈ 68.0 m/s² and ≈ 1.080 s).** Both are read from the article's figures, not stated. The stabilisation time "
         f"is set by the geometry of the passage: the last wheelset passes the observation point at t = {t_last:.3f} s, and the "
-        f"5 % rule fires {b0['rail_acc_settle'] - t_last:.3f} s later, while the rail still carries the car's approach to the "
+        f"5 % rule fires {b0[A_RST] - t_last:.3f} s later, while the rail still carries the car's approach to the "
         "next span. A damper tuned to 0.5–1.3 kHz barely moves it (η_arst of the chosen design in Table 3), so η_r, the mean "
         "of three rates, is diluted by a rate that cannot move.")
     L.append("")
@@ -400,7 +401,7 @@ def _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick) -> lis
         strongest = f" The uncontrolled rail spectrum's strongest one-third-octave band is {f[int(np.nanargmax(u))]:g} Hz (frequency view above)."
     L.append(
         f"**The best sweep case ({best['b_t']:g} kg, {best['k_t']:.3g} N/m, {best['c_t']:.3g} N·s/m; working frequency "
-        f"{best['working_frequency']:.0f} Hz, a_rm cut by {100 * best['eta_rail_acc_max']:.1f} %) against the article's "
+        f"{best['working_frequency']:.0f} Hz, a_rm cut by {100 * best[rate(A_RM)]:.1f} %) against the article's "
         f"(5 kg, 2e8 N/m, 1e3 N·s/m; 1006.6 Hz, 16.4 %).** The rail of the article's model is Euler–Bernoulli, whose first "
         f"pinned–pinned frequency is {pp:.0f} Hz, not the ≈ 1 kHz of a real rail with shear (docs/validation.md)." + strongest +
         " A damper works where the response has its energy; in vtb's model of the article's system that is below the "
@@ -410,8 +411,8 @@ def _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick) -> lis
     if chosen is not None and _table3_row(opt) is not None:
         r = _table3_row(opt)
         L.append(
-            f"**The MOGA optimum (η_r = {100 * r['eta_r']:.2f} %: a_rm {100 * r['eta_rail_acc_max']:.1f} %, a_rRMS "
-            f"{100 * r['eta_rail_acc_rms']:.1f} %, a_rst {100 * r['eta_rail_acc_settle']:.1f} %; slab {100 * r['eta_slab_acc_max']:+.1f} %) "
+            f"**The MOGA optimum (η_r = {100 * r['eta_r']:.2f} %: a_rm {100 * r[rate(A_RM)]:.1f} %, a_rRMS "
+            f"{100 * r[rate(A_RRMS)]:.1f} %, a_rst {100 * r[rate(A_RST)]:.1f} %; slab {100 * r[rate(A_SM)]:+.1f} %) "
             "against the article's (12.45 %: 16.4 %, 8.5 %, 2.8 %; slab 5.5 %).** The amplitude cut is of the same order; the "
             "r.m.s. is the rail's whole record, dominated by the wheels' broadband passage, of which the TIDs take one band "
             "(largest band cut in the frequency view), and the stabilisation time does not move (above).")
@@ -419,7 +420,7 @@ def _gaps_text(cfg, rows33, sw, opt, chosen, car, bands, evidence, quick) -> lis
     if car and "car_bands" in evidence:
         cb = evidence["car_bands"]
         L.append(
-            f"**Car body ({100 * car['car_acc_max'][2]:+.2f} % acceleration, {100 * car['car_disp_max'][2]:+.2f} % displacement, "
+            f"**Car body ({100 * car[A_CM][2]:+.2f} % acceleration, {100 * car[D_CM][2]:+.2f} % displacement, "
             "against the article's −47.5 % and −14.2 %).** Of the bands the run's record resolves (from "
             f"{cb['first_band']:g} Hz up; the body's own modes near 1 Hz lie below), the car body's acceleration is strongest at "
             f"{cb['peak_band']:g} Hz ({cb['peak_level']:.1f} dB re 1e-6 m/s²); at the chosen TID's working frequency ({cb['f_t']:.0f} Hz, band "

@@ -43,6 +43,7 @@ from ..studies.journal import config_stamp
 from .tid_sweep import ARTICLE_BEST_RAIL_CUT, sweep
 from ..studies.journal import same_config
 from ..machine import describe
+from ..run.indices import A_CM, A_RM, A_RRMS, A_SM, F_MIN, LOSS, rate
 
 #: Irregularity levels tried for the no-contact-loss level, as factors of the calibrated scale.
 LEVEL_FACTORS = (1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 6)
@@ -120,11 +121,10 @@ def no_loss_level(plan: dict, progress: bool, path: Path, executor=None) -> tupl
         failed = next((r for r in runs if isinstance(r, BaseException)), None)
         if failed is not None:
             raise failed
-        rows = [dict(factor=f, scale=c.irregularity.scale if f > 0 else 0.0, rail_acc_max=r["rail_acc_max"], slab_acc_max=r["slab_acc_max"],
-                     contact_force_min=r["contact_force_min"], contact_loss_events=r["contact_loss_events"])
+        rows = [{"factor": f, "scale": c.irregularity.scale if f > 0 else 0.0, **{m: r[m] for m in (A_RM, A_SM, F_MIN, LOSS)}}
                 for f, c, r in zip(LEVEL_FACTORS + (0.0,), cfgs, runs)]
         path.write_text(json.dumps(dict(key=key, rows=rows)) + "\n")
-    ok = [r["factor"] for r in rows if r["contact_loss_events"] == 0 and r["factor"] > 0]
+    ok = [r["factor"] for r in rows if r[LOSS] == 0 and r["factor"] > 0]
     return (max(ok) if ok else min(LEVEL_FACTORS)), rows
 
 
@@ -137,7 +137,7 @@ def converged_chain(cfg, plan: dict, out: Path, label: str, progress: bool, exec
     best, worst = sw.best(), sw.worst_slab_increase()
     base = sw.baseline
     res = dict(label=label, scale=cfg.irregularity.scale, baseline=base, sweep_best=best, worst_slab_increase=worst,
-               slab_at_best=(best["slab_acc_max"] - base["slab_acc_max"]) / base["slab_acc_max"],
+               slab_at_best=(best[A_SM] - base[A_SM]) / base[A_SM],
                pinned_pinned_frequency=pinned_pinned_frequency(cfg), n_designs=len(sw) - 1, n_evals=opt.moga.n_evals)
     if len(opt):
         p = opt.pareto
@@ -244,14 +244,14 @@ def _held_out(cfg, compare: dict, samples: int, speeds: list, path: Path, progre
 
 
 def _chain_row(c: dict) -> dict:
-    row = dict(level=c["label"], scale=c["scale"], rail_acc_max_0=c["baseline"]["rail_acc_max"], slab_acc_max_0=c["baseline"]["slab_acc_max"],
-               contact_loss_events_0=c["baseline"]["contact_loss_events"], sweep_best_b_t=c["sweep_best"]["b_t"], sweep_best_k_t=c["sweep_best"]["k_t"],
-               sweep_best_c_t=c["sweep_best"]["c_t"], sweep_best_eta_rail=c["sweep_best"]["eta_rail_acc_max"], sweep_best_f_t=c["sweep_best"]["working_frequency"],
+    row = {"level": c["label"], "scale": c["scale"], **{f"{m}_0": c["baseline"][m] for m in (A_RM, A_SM, LOSS)}}
+    row.update(sweep_best_b_t=c["sweep_best"]["b_t"], sweep_best_k_t=c["sweep_best"]["k_t"],
+               sweep_best_c_t=c["sweep_best"]["c_t"], sweep_best_eta_rail=c["sweep_best"][rate(A_RM)], sweep_best_f_t=c["sweep_best"]["working_frequency"],
                slab_change_at_sweep_best=c["slab_at_best"], worst_slab_increase=c["worst_slab_increase"]["relative"], pinned_pinned_frequency=c["pinned_pinned_frequency"])
     for key in ("optimum", "best_eta_r"):
         if key in c:
             o = c[key]
-            row.update({f"{key}_{k}": o[k] for k in ("b_t", "k_t", "c_t", "eta_rail_acc_max", "eta_slab_acc_max", "eta_car_acc_max")})
+            row.update({f"{key}_{k}": o[k] for k in ("b_t", "k_t", "c_t", rate(A_RM), rate(A_SM), rate(A_CM))})
     return row
 
 
@@ -270,8 +270,8 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
     cal, nol = chains["calibrated"], chains["no_loss"]
     rows33 = {r["quantity"]: r for r in article["table_3_3"]}
     err = max(abs(r["vtb_error"]) for r in rows33.values())
-    conv_rail = cal["baseline"]["rail_acc_max"]
-    art_rail = rows33["rail_acc_max"]["vtb_hybrid"]
+    conv_rail = cal["baseline"][A_RM]
+    art_rail = rows33[A_RM]["vtb_hybrid"]
     out.append((CONCLUSIONS[0], "holds between the article's two models only" if err <= 0.05 else "does not hold",
                 "hybrid vs the 251-element FEM (within 5 % counts as a few per cent): "
                 + ", ".join(f"{q} {100 * r['vtb_error']:+.1f} %" for q, r in rows33.items())
@@ -279,9 +279,9 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
                 f"verifies neither; the converged model's uncontrolled rail peak (≤ {paper_config(model='converged').output.band_limit:g} Hz) at the calibrated level is "
                 f"{conv_rail:.0f} m/s² against the hybrid's {art_rail:.0f} m/s² ({100 * (conv_rail / art_rail - 1):+.0f} %)."))
 
-    art_cut = article["sweep_best"]["eta_rail_acc_max"]
-    conv_cuts = (cal["sweep_best"]["eta_rail_acc_max"], nol["sweep_best"]["eta_rail_acc_max"])
-    held_best = {k: _mean_sem(ev, "eta_rail_acc_max") for k, ev in held.items()}
+    art_cut = article["sweep_best"][rate(A_RM)]
+    conv_cuts = (cal["sweep_best"][rate(A_RM)], nol["sweep_best"][rate(A_RM)])
+    held_best = {k: _mean_sem(ev, rate(A_RM)) for k, ev in held.items()}
     close = [abs(x - ARTICLE_BEST_RAIL_CUT) <= 0.05 for x in (art_cut,) + conv_cuts + tuple(m for m, _ in held_best.values())]
     out.append((CONCLUSIONS[1], "holds" if all(close) else "holds on the article's model and sample only" if close[0] else
                 "holds under stated conditions" if any(close) else "does not hold",
@@ -291,7 +291,7 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
                 + "; ".join(f"{k} {_pm(v)}" for k, v in held_best.items()) + "."))
 
     rises = [article["worst_slab_increase"]["relative"], cal["worst_slab_increase"]["relative"], nol["worst_slab_increase"]["relative"]]
-    slab_held = {k: _mean_sem(ev, "eta_slab_acc_max") for k, ev in held.items()}
+    slab_held = {k: _mean_sem(ev, rate(A_SM)) for k, ev in held.items()}
     raised = [r > 0 for r in rises]
     out.append((CONCLUSIONS[2], "holds" if all(raised) else "holds under stated conditions" if any(raised) else "does not hold",
                 f"worst rise of a_sm at a rail-optimal TID per b_t: {100 * rises[0]:+.1f} % (article model), {100 * rises[1]:+.1f} % and "
@@ -311,18 +311,18 @@ def _verdicts(plan, article, chains, ropt, designs, held, speeds) -> list:
                 f"so its working frequencies span {_sweep_band(plan['grid'], pp_conv)[0]:.0f}–{_sweep_band(plan['grid'], pp_conv)[1]:.0f} Hz; an optimum on that span's edge may lie beyond it."))
 
     ch = article.get("chosen") or {}
-    car = (article.get("car") or {}).get("car_acc_max")
+    car = (article.get("car") or {}).get(A_CM)
     conv = nol.get("best_eta_r", {})
-    target = (ARTICLE_TABLE3_1["eta_rail_acc_max"], ARTICLE_TABLE3_1["eta_slab_acc_max"], 1 - ARTICLE_CAR_ACC[1] / ARTICLE_CAR_ACC[0])
-    got = [(ch["eta_rail_acc_max"], ch["eta_slab_acc_max"], car[2] if car else math.nan)] if ch else []
+    target = (ARTICLE_TABLE3_1[rate(A_RM)], ARTICLE_TABLE3_1[rate(A_SM)], 1 - ARTICLE_CAR_ACC[1] / ARTICLE_CAR_ACC[0])
+    got = [(ch[rate(A_RM)], ch[rate(A_SM)], car[2] if car else math.nan)] if ch else []
     if conv:
-        got.append((conv["eta_rail_acc_max"], conv["eta_slab_acc_max"], conv["eta_car_acc_max"]))
+        got.append((conv[rate(A_RM)], conv[rate(A_SM)], conv[rate(A_CM)]))
     ok = [all(abs(x - y) <= 0.05 for x, y in zip(g, target)) for g in got]
     parts = []
     if ch:
         parts.append(f"article model, MOGA choice (best η_r): ({100 * got[0][0]:.1f} %, {100 * got[0][1]:.1f} %, {100 * got[0][2]:.2f} %)")
     if conv:
-        parts.append(f"fast converged model, no-loss level: ({100 * conv['eta_rail_acc_max']:.1f} %, {100 * conv['eta_slab_acc_max']:.1f} %, {100 * conv['eta_car_acc_max']:.2f} %)")
+        parts.append(f"fast converged model, no-loss level: ({100 * conv[rate(A_RM)]:.1f} %, {100 * conv[rate(A_SM)]:.1f} %, {100 * conv[rate(A_CM)]:.2f} %)")
     else:
         parts.append("fast converged model, no-loss level: the optimisation found no design meeting the constraints")
     out.append((CONCLUSIONS[4], "holds" if ok and all(ok) else "holds under stated conditions" if any(ok) else "does not hold",
@@ -339,7 +339,7 @@ def _figures(out: Path, ropt, designs, held, speeds) -> None:
     # Every evaluated design: mean ratios with their standard errors, the chosen one marked.
     reproduce._save(plotting.plot_robust_designs(ropt.evaluated_table(), designs["all speeds"]), out, "fig_robust_designs")
     # Held-out: reduction rates per speed, mean ± s.e.
-    series = {label: {key: [_mean_sem(ev, key, v) for v in speeds] for key in ("eta_rail_acc_max", "eta_slab_acc_max")}
+    series = {label: {key: [_mean_sem(ev, key, v) for v in speeds] for key in (rate(A_RM), rate(A_SM))}
               for label, ev in held.items()}
     reproduce._save(plotting.plot_held_out(series, speeds), out, "fig_held_out")
 
@@ -352,9 +352,9 @@ def _smooth_text(levels: list) -> list:
         return []
     band = paper_config(model="converged").output.band_limit
     return [
-        f"On a smooth rail the fast converged model's uncontrolled rail peak is {smooth['rail_acc_max']:.0f} m/s², "
-        f"{100 * smooth['rail_acc_max'] / full['rail_acc_max']:.0f} % of its value at the calibrated level (the slab: "
-        f"{100 * smooth['slab_acc_max'] / full['slab_acc_max']:.0f} %). On the converged model a_rm is the rail peak low-passed at "
+        f"On a smooth rail the fast converged model's uncontrolled rail peak is {smooth[A_RM]:.0f} m/s², "
+        f"{100 * smooth[A_RM] / full[A_RM]:.0f} % of its value at the calibrated level (the slab: "
+        f"{100 * smooth[A_SM] / full[A_SM]:.0f} %). On the converged model a_rm is the rail peak low-passed at "
         f"{band:g} Hz with the wheels on their Hertz contact patches (`output.band_limit`, `contact_patch`): the raw peak of a point "
         "contact grows without limit as the rail mesh and the time step are refined, this index moves by under 0.5 % "
         "(the documentation's page on the contact patch gives the refinement).",
@@ -400,7 +400,7 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         "## 1. The article's chain on the article's model",
         "",
         f"Best sweep case: b_t = {article['sweep_best']['b_t']:g} kg, k_t = {article['sweep_best']['k_t']:.3g} N/m, c_t = {article['sweep_best']['c_t']:g} N·s/m, "
-        f"a_rm cut {100 * article['sweep_best']['eta_rail_acc_max']:.2f} % (article {100 * ARTICLE_BEST_RAIL_CUT:.2f} %). The full comparison is in the chain's own report.",
+        f"a_rm cut {100 * article['sweep_best'][rate(A_RM)]:.2f} % (article {100 * ARTICLE_BEST_RAIL_CUT:.2f} %). The full comparison is in the chain's own report.",
         "",
         "## 2. The fast converged model at two levels",
         "",
@@ -412,7 +412,7 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         "",
         "| factor × calibrated | scale | a_rm0 (m/s²) | a_sm0 (m/s²) | min contact force (N) | contact-loss events |",
         "|---|---|---|---|---|---|",
-    ] + [f"| {r['factor']:.3g}{' (smooth rail)' if r['factor'] == 0 else ''} | {r['scale']:.3f} | {r['rail_acc_max']:.0f} | {r['slab_acc_max']:.2f} | {r['contact_force_min']:.0f} | {r['contact_loss_events']:.0f} |" for r in levels] + [
+    ] + [f"| {r['factor']:.3g}{' (smooth rail)' if r['factor'] == 0 else ''} | {r['scale']:.3f} | {r[A_RM]:.0f} | {r[A_SM]:.2f} | {r[F_MIN]:.0f} | {r[LOSS]:.0f} |" for r in levels] + [
         "",
         f"**The level without contact loss is {factor:.3g} × the calibrated scale** (scale {chains['no_loss']['scale']:.3f}), the largest tried "
         "at which no wheel leaves the rail.",
@@ -425,11 +425,11 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
     for c in chains.values():
         b, o = c["sweep_best"], c.get("optimum")
         L.append(
-            f"| {c['label'].replace('_', ' ')} | {c['baseline']['rail_acc_max']:.0f} | {c['baseline']['slab_acc_max']:.2f} | ({b['b_t']:g}, {b['k_t']:.3g}, {b['c_t']:g}) | "
-            f"{b['working_frequency']:.0f} | {100 * b['eta_rail_acc_max']:.1f} % | {100 * c['slab_at_best']:+.1f} % | {100 * c['worst_slab_increase']['relative']:+.1f} % | "
-            + (f"{100 * o['eta_rail_acc_max']:.1f} %, {100 * o['eta_slab_acc_max']:.1f} %, {100 * o['eta_car_acc_max']:.2f} % |" if o else "no feasible design |"))
-    b0 = np.array([b["rail_acc_max"] for b in ropt.baseline.values()])
-    loss = sum(b["contact_loss_events"] > 0 for b in ropt.baseline.values())
+            f"| {c['label'].replace('_', ' ')} | {c['baseline'][A_RM]:.0f} | {c['baseline'][A_SM]:.2f} | ({b['b_t']:g}, {b['k_t']:.3g}, {b['c_t']:g}) | "
+            f"{b['working_frequency']:.0f} | {100 * b[rate(A_RM)]:.1f} % | {100 * c['slab_at_best']:+.1f} % | {100 * c['worst_slab_increase']['relative']:+.1f} % | "
+            + (f"{100 * o[rate(A_RM)]:.1f} %, {100 * o[rate(A_SM)]:.1f} %, {100 * o[rate(A_CM)]:.2f} % |" if o else "no feasible design |"))
+    b0 = np.array([b[A_RM] for b in ropt.baseline.values()])
+    loss = sum(b[LOSS] > 0 for b in ropt.baseline.values())
     L += [
         "",
         f"Pinned–pinned frequency of the converged (Timoshenko) rail: {chains['no_loss']['pinned_pinned_frequency']:.0f} Hz.",
@@ -448,8 +448,8 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for k, d in designs.items():
-        L.append(f"| {k} | {d['b_t']:.3g} | {d['k_t']:.3g} | {d['c_t']:.3g} | {_f_t(d):.0f} | {d['ratio_rail_acc_max']:.4f} ± {d['sem_rail_acc_max']:.4f} | "
-                 f"{d['ratio_slab_acc_max']:.4f} ± {d['sem_slab_acc_max']:.4f} | {d['ratio_rail_acc_rms']:.4f} | {100 * d['satisfaction_rate']:.0f} % | {'yes' if d['feasible'] else 'no'} |")
+        L.append(f"| {k} | {d['b_t']:.3g} | {d['k_t']:.3g} | {d['c_t']:.3g} | {_f_t(d):.0f} | {d[f'ratio_{A_RM}']:.4f} ± {d[f'sem_{A_RM}']:.4f} | "
+                 f"{d[f'ratio_{A_SM}']:.4f} ± {d[f'sem_{A_SM}']:.4f} | {d[f'ratio_{A_RRMS}']:.4f} | {100 * d['satisfaction_rate']:.0f} % | {'yes' if d['feasible'] else 'no'} |")
     if not any(d["feasible"] for d in designs.values()):
         L += ["", "**No evaluated design meets the constraints** under the statistic: each raises the mean slab acceleration above its "
               "uncontrolled value. The table gives, per speed and for all speeds, the design with the lowest a_rm ratio regardless."]
@@ -469,8 +469,8 @@ def _report(out, quick, plan, times, this_total, article, factor, levels, chains
     for k, ev in held.items():
         for v in list(speeds) + [None]:
             s = ev.summary("mean", v)
-            L.append(f"| {k} | {'all' if v is None else f'{v:g}'} | {_pm(s['eta_rail_acc_max'][1:])} | {_pm(s['eta_slab_acc_max'][1:])} | "
-                     f"{_pm(s['eta_rail_acc_rms'][1:])} | {100 * s['satisfaction_rate']:.0f} % |")
+            L.append(f"| {k} | {'all' if v is None else f'{v:g}'} | {_pm(s[rate(A_RM)][1:])} | {_pm(s[rate(A_SM)][1:])} | "
+                     f"{_pm(s[rate(A_RRMS)][1:])} | {100 * s['satisfaction_rate']:.0f} % |")
     L += [
         "",
         "![held out](fig_held_out.png)",

@@ -27,6 +27,7 @@ from ..config.fields import Config
 from ..config.presets import PAPER_CALIBRATED_SCALE, paper_config, tids_around
 from ..run.simulate import Result, simulate
 from ..machine import describe
+from ..run.indices import A_RM, D_RM, D_SM
 
 #: Band limits (Hz): rail acceleration compared below RAIL_BAND_HZ (where the dampers act),
 #: the slab below SLAB_BAND_HZ.
@@ -163,9 +164,9 @@ def amplitudes(res: Result) -> dict:
     ra = ra[:, 0] if ra.ndim > 1 else ra
     sa = sa[:, 0] if sa.ndim > 1 else sa
     return {
-        "rail_disp": m["rail_disp_max"],
-        "slab_disp": m["slab_disp_max"],
-        "rail_acc": m["rail_acc_max"],
+        "rail_disp": m[D_RM],
+        "slab_disp": m[D_SM],
+        "rail_acc": m[A_RM],
         "rail_acc_lp": float(np.abs(_low_pass(ra, dt, RAIL_BAND_HZ)).max()),
         "slab_acc_lp": float(np.abs(_low_pass(sa, dt, SLAB_BAND_HZ)).max()),
         "bands": band_mean_squares(ra, dt).tolist(),

@@ -44,8 +44,17 @@ def index(where: str, quantity: str) -> str:
 #: The article's layers: the rail (the top layer) and the slab under it.
 RAIL, SLAB = "rail", "slab"
 #: The article's indices in its symbols: the rail's acceleration amplitude a_rm, r.m.s. a_rRMS and
-#: settling time a_rst, the slab's amplitude a_sm.
+#: settling time a_rst, the slab's amplitude a_sm; beside them the displacement amplitudes of
+#: the rail, the slab and the car body, the car body's acceleration amplitude, the wheels' largest
+#: and smallest contact force and their contact-loss events.
 A_RM, A_RRMS, A_RST, A_SM = index(RAIL, "acc_max"), index(RAIL, "acc_rms"), index(RAIL, "acc_settle"), index(SLAB, "acc_max")
+D_RM, D_SM, D_CM, A_CM = index(RAIL, "disp_max"), index(SLAB, "disp_max"), index("car", "disp_max"), index("car", "acc_max")
+F_MAX, F_MIN, LOSS = index("contact", "force_max"), index("contact", "force_min"), index("contact", "loss_events")
+
+
+def rate(name: str) -> str:
+    """The column of an index's reduction rate η = (X0 − X)/X0 in the studies' tables."""
+    return f"eta_{name}"
 
 #: The indices the article's studies journal per case: each of its layers' peak, r.m.s. and
 #: settling time of the acceleration and peak displacement, the car body's, and the contacts'.
@@ -60,4 +69,4 @@ CONSTRAINTS = (A_RM, A_SM, A_RRMS, A_RST)
 #: The rail indices whose mean reduction is the article's comprehensive rate η_r.
 RAIL_RATE = (A_RM, A_RRMS, A_RST)
 #: Indices whose reduction rate η = (X0 − X)/X0 a study reports (the rest are counts or signed).
-REDUCED = tuple(m for m in METRICS if m not in (index("contact", "force_min"), index("contact", "loss_events")))
+REDUCED = tuple(m for m in METRICS if m not in (F_MIN, LOSS))
