@@ -206,7 +206,7 @@ def cmd_simulate(args) -> int:
 @contextlib.contextmanager
 def study_executor(args):
     """The executor a study command's runs go to: a Dask cluster's (``--scheduler ADDRESS``),
-    else None (this process; :mod:`vtb.scaleout`)."""
+    else None (this process; :mod:`vtb.run.scaleout`)."""
     address = getattr(args, "scheduler", None)
     if not address:
         yield None

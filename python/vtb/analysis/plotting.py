@@ -197,7 +197,7 @@ def plot_third_octave(results: Sequence, labels: Sequence[str], layers: Sequence
 @styled
 def plot_receptance(frequencies, receptances: Sequence, labels: Sequence[str], path=None, pinned_pinned: Optional[float] = None,
                     resolved: Optional[float] = None) -> Figure:
-    """Magnitude and phase of point or transfer receptances (m/N, :func:`vtb.track.receptance`)
+    """Magnitude and phase of point or transfer receptances (m/N, :func:`vtb.analysis.track.receptance`)
     against frequency (Hz); ``pinned_pinned`` marks the first pinned–pinned frequency (Hz),
     ``resolved`` shades the frequencies above a model's resolved band (Hz)."""
     fig = figure(80.0)
@@ -227,7 +227,7 @@ def plot_receptance(frequencies, receptances: Sequence, labels: Sequence[str], p
 
 @styled
 def plot_decay_rate(frequencies, decay_rates: Sequence, labels: Sequence[str], path=None, resolved: Optional[float] = None) -> Figure:
-    """Track decay rates (dB/m, :func:`vtb.track.decay_rate`) against frequency (Hz);
+    """Track decay rates (dB/m, :func:`vtb.analysis.track.decay_rate`) against frequency (Hz);
     ``resolved`` shades the frequencies above a model's resolved band (Hz)."""
     fig = figure(55.0)
     ax = fig.subplots()

@@ -142,7 +142,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     ``pop_size``, ``n_gen`` override the optimisation budget (full: 100 × 100; the warm run's
     cap). ``optimiser``: see :func:`optimisations`. The sweep journal ``out/sweep.csv`` and the
     optimisers' checkpoints are resumed if present. ``executor``: the sweep's and the
-    optimisations' runs as tasks on it (:mod:`vtb.scaleout`)."""
+    optimisations' runs as tasks on it (:mod:`vtb.run.scaleout`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     plan = dict(QUICK if quick else FULL)
@@ -215,7 +215,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
         car = {k: (mu[k], mc[k], (mu[k] - mc[k]) / mu[k]) for k in (D_CM, A_CM)}
         evidence["car_bands"] = _car_body_bands(unc, chosen)
     _report(out, quick, cfg, rows33, sweep_text, runs, table3, car, times, plan, resumed, bands, evidence, sw, chosen)
-    summary = dict(  # the chain's headline numbers, for studies built on it (vtb.robust_study)
+    summary = dict(  # the chain's headline numbers, for studies built on it (vtb.article.robust_study)
         table_3_3=rows33, sweep_best=sw.best(), worst_slab_increase=sw.worst_slab_increase(),
         pinned_pinned_frequency=pinned_pinned_frequency(cfg), chosen=next((r for r in table3 if r["choice"] == "best η_r"), None),
         car=car, evidence={k: v for k, v in evidence.items() if k != "car_bands"},
@@ -250,7 +250,7 @@ def _optimiser_text(runs: dict, plan: dict) -> list:
         took = "run time unknown (its checkpoint predates the record)" if math.isnan(seconds) else f"{seconds:.0f} s ({seconds / 60:.1f} min) of wall time"
         L.append(f"* {label}: NSGA-II, population {m.pop.X.shape[0]}, at most {plan['n_gen']} generations, {start}: "
                  f"{m.n_gen} generations, {m.n_evals} evaluations ({m.message}), {took}; hypervolume {m.history[-1].hypervolume:.6g} (m/s²)².")
-    why = (f"the {DEFAULT_OPTIMISER} start is vtb's default (`vtb.reproduce.DEFAULT_OPTIMISER`), chosen by the median final hypervolume of "
+    why = (f"the {DEFAULT_OPTIMISER} start is vtb's default (`vtb.article.reproduce.DEFAULT_OPTIMISER`), chosen by the median final hypervolume of "
            "each start over five seeds, each run with this stop (docs/optimiser-choice/report.md in vtb's repository)")
     L.append(f"* Why this start: {why}." if set(runs) == {DEFAULT_OPTIMISER} else f"* The start was chosen by the caller (`--optimiser`); {why}.")
     if len(runs) == 2 and runs["cold"][0].moga.history[-1].hypervolume > 0:

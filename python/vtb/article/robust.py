@@ -146,7 +146,7 @@ def design_statistics(rows: list, statistic_name: str) -> dict:
     (``ratio_<metric>``), its mean (``mean_<metric>``) and the standard error of that mean
     (``sem_<metric>``); ``satisfaction_rate`` (share of cases meeting every constraint); and
     ``feasible``: the statistic of X/X0 at or below 1 for every index of
-    :data:`vtb.optimize.CONSTRAINTS` (the optimiser's G = statistic(X/X0) − 1 ≤ 0). A design
+    :data:`vtb.run.indices.CONSTRAINTS` (the optimiser's G = statistic(X/X0) − 1 ≤ 0). A design
     with a failed case has infinite ratios and is infeasible."""
     failed = any(r["error"] for r in rows)
     out = {}
@@ -166,7 +166,7 @@ def design_statistics(rows: list, statistic_name: str) -> dict:
 
 def robust_objectives(rows: list, statistic_name: str) -> tuple:
     """F = (statistic of a_rm/a_rm0, statistic of a_sm/a_sm0) and G = statistic(X/X0) − 1 of
-    the :data:`~vtb.optimize.CONSTRAINTS` over a design's case rows (a failed case: F = 10,
+    the :data:`~vtb.run.indices.CONSTRAINTS` over a design's case rows (a failed case: F = 10,
     G = ∞, as a failed run of a single-case optimisation)."""
     s = design_statistics(rows, statistic_name)
     if any(r["error"] for r in rows):
@@ -205,7 +205,7 @@ class DesignEvaluation:
     """A design over samples and speeds. ``rows``: one dict per case with ``speed`` (m/s),
     ``seed``, every metric uncontrolled (``<metric>_0``) and with the design (``<metric>``, SI
     units), the reduction rates ``eta_<metric>`` = (X0 − X)/X0 of :data:`REDUCED`, and
-    ``feasible`` (True when every constrained index of :data:`vtb.optimize.CONSTRAINTS` is at or
+    ``feasible`` (True when every constrained index of :data:`vtb.run.indices.CONSTRAINTS` is at or
     below its uncontrolled value); a failed case has ``error`` set and NaN indices.
     ``design``: the dampers evaluated."""
 
@@ -258,7 +258,7 @@ def evaluate_designs(
 ) -> list:
     """:func:`evaluate_design` of several designs on the same cases, which run uncontrolled
     once for all of them; one :class:`DesignEvaluation` per design. ``executor``: see
-    :mod:`vtb.scaleout`."""
+    :mod:`vtb.run.scaleout`."""
     tids = [_design_tids(config, d) for d in designs]
     todo = cases(config, samples, speeds, first_seed)
     controlled = []
@@ -361,7 +361,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
     directory), one journal per case, ``out/v<speed>_seed<seed>.csv``, so an interrupted study
     resumes. Every case runs in one batch (a speed's uncontrolled runs share one model, its
     controlled runs another), in lockstep groups on every core or in tasks on ``executor``
-    (:mod:`vtb.scaleout`): one batch, not one per speed, so that the groups of all speeds
+    (:mod:`vtb.run.scaleout`): one batch, not one per speed, so that the groups of all speeds
     share out the cores or workers evenly. A case is journaled as soon as it is known."""
     statistic([1.0], statistic_name)  # a bad name fails before any run
     config, grid_cases = plan(config, b_t, k_t, c_t)

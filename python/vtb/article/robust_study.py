@@ -3,7 +3,7 @@
 It re-examines the article's chain where it can be trusted and over the excitation a designer
 cannot know in advance:
 
-1. **the article's chain** on the article's model at the calibrated level (:func:`vtb.reproduce.run`);
+1. **the article's chain** on the article's model at the calibrated level (:func:`vtb.article.reproduce.run`);
 2. **the same chain on the fast converged model** (``paper_config(model="fast")``: the
    converged preset by complex-modal synthesis, docs/synthesis.md), at the calibrated level and
    at a level without wheel–rail contact loss (the largest of :data:`LEVEL_FACTORS` × the
@@ -158,7 +158,7 @@ def _f_t(d: dict) -> float:
 def run(out, quick: bool = False, progress: bool = True, executor=None) -> Path:
     """Runs the study and writes ``out/report.md`` with its figures (PNG and PDF) and CSV
     tables. Returns the report's path. ``executor``: every stage's runs as tasks on it (a
-    process pool, or Dask's ``client.get_executor()``; :mod:`vtb.scaleout`)."""
+    process pool, or Dask's ``client.get_executor()``; :mod:`vtb.run.scaleout`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     plan = PLANS["quick" if quick else "full"]

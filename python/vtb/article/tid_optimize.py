@@ -123,7 +123,7 @@ def optimize(
     :func:`vtb.tids_around`) for (a_rm, a_sm)
     under the article's constraints and bounds. ``algorithm``: ``"nsga2"`` or ``"gamultiobj"``
     (see :mod:`vtb.optim`); ``executor``: run each generation's designs as tasks on it
-    (:mod:`vtb.scaleout`) instead of the in-process Rust batch; every design is journaled beside
+    (:mod:`vtb.run.scaleout`) instead of the in-process Rust batch; every design is journaled beside
     a ``checkpoint`` as soon as its runs are in, either way. The defaults are the article's cold budget:
     population 100 × 100 generations from a random start, no early stop.
 

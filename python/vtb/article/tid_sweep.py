@@ -4,7 +4,7 @@
 with the dampers of ``config.tids`` (default :func:`vtb.tids_around`): the study of
 :func:`vtb.study` over the aliases ``b_t, k_t, c_t`` with the uncontrolled run (``tids =
 None``) as its reference case and the indices :data:`METRICS`. With ``out=`` finished cases
-are appended to a CSV journal (:mod:`vtb.journal`) as each lockstep group completes;
+are appended to a CSV journal (:mod:`vtb.studies.journal`) as each lockstep group completes;
 re-running with the same path skips them. Rows are keyed by their parameters (``nan`` for the
 baseline), not by a case number, so that a changed grid reuses every row it shares.
 """
@@ -52,9 +52,9 @@ def sweep(
 
     **Over samples and speeds** (``samples=N`` or a list of seeds, ``speeds=[...]`` in m/s;
     docs/robust.md): the grid is swept on every case (the design seeds
-    :data:`vtb.robust.DESIGN_SEED0` + i at each speed; ``samples`` None: the configuration's
+    :data:`vtb.article.robust.DESIGN_SEED0` + i at each speed; ``samples`` None: the configuration's
     own seed), each case against its own uncontrolled run, and the answer is a
-    :class:`vtb.robust.RobustSweep` ranking the designs by ``statistic`` of X/X0 over the
+    :class:`vtb.article.robust.RobustSweep` ranking the designs by ``statistic`` of X/X0 over the
     cases, with the standard errors. ``out`` is then a directory holding one journal per case.
 
     ``config.tids`` gives the dampers' count and positions (default: :func:`vtb.tids_around`).
@@ -62,7 +62,7 @@ def sweep(
     None), and each lockstep group's cases are journaled and counted by the progress bar as
     soon as the group finishes, so that Ctrl-C or a kill keeps them; with ``executor`` (a
     process pool, or Dask's ``client.get_executor()``) tasks of ``chunk`` cases (default one
-    lockstep group) run there, each journaled when it returns (:mod:`vtb.scaleout`). A failing
+    lockstep group) run there, each journaled when it returns (:mod:`vtb.run.scaleout`). A failing
     case (e.g. contact non-convergence) is recorded with its reason and the sweep goes on.
     ``progress``: a tqdm bar (True), none (False) or a callable ``f(done, total)``.
 

@@ -1,6 +1,6 @@
 """Run configuration as plain dataclasses.
 
-The Rust core owns the configuration: its schema (:mod:`vtb.schema`) defines every field,
+The Rust core owns the configuration: its schema (:mod:`vtb.config.schema`) defines every field,
 type and default, the defaults here are read from it, ``tests/test_schema.py`` holds these
 classes to it, and the core alone validates the values (naming the field on error).
 :meth:`Config.to_core_json` serialises everything except the irregularity, which is
@@ -124,7 +124,7 @@ class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
     FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements).
     ``synthesis_cutoff`` (Hz): run a finite-element structure by complex-modal synthesis
-    (:mod:`vtb.synthesis`) instead of stepping its elements."""
+    (:mod:`vtb.run.synthesis`) instead of stepping its elements."""
 
     method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
     fem_elements: int = _default("DiscretisationConfig", "fem_elements")
@@ -368,7 +368,7 @@ class Config(StrictFields):
     def validate(self) -> None:
         """Checks the whole configuration now (the core's validation, against the generated
         irregularity) and raises :class:`~vtb.errors.ConfigError` naming the first bad field;
-        :func:`vtb.simulate` does the same check when it runs."""
+        :func:`vtb.run.simulate` does the same check when it runs."""
         # The one import circle of vtb: a configuration's own check is that of a prepared run,
         # and the preparation (vtb.config.prepare) takes a Config.
         from .prepare import validate

@@ -63,7 +63,7 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
     is not converged in the rail's 0.3–2 kHz band; use the converged one for rail vibration
     and damper design.
 
-    ``model="fast"``: the converged model run by complex-modal synthesis (:mod:`vtb.synthesis`,
+    ``model="fast"``: the converged model run by complex-modal synthesis (:mod:`vtb.run.synthesis`,
     docs/synthesis.md): its finite elements reduced once to the complex modes below 4 kHz plus
     the rail's residual (cached on disk), each mode stepped exactly at Δt = 5e-5 s. It
     is verified against the converged model (rail and slab indices within 3 %) at a fraction

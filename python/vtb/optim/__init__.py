@@ -5,7 +5,7 @@ result), :mod:`~vtb.optim.indicators` (fronts, crowding, hypervolume, IGD, trade
 :mod:`~vtb.optim.algorithm` (what they share), :mod:`~vtb.optim.driver` (:func:`minimize`: warm
 start, hypervolume stop) and :mod:`~vtb.optim.checkpoint` (resumable runs).
 
-Everything minimises. ``vtb.optim`` holds every name of the former ``vtb.moga``.
+Everything minimises. ``vtb.optim`` holds every name of the former ``vtb.optim``.
 """
 
 from .checkpoint import saved_identity, write_atomically

@@ -17,7 +17,7 @@ as it is known, so that the study journals it at once:
 
 A run's result does not depend on where or with which others it ran (lockstep groups give
 each job its own bits), so every path gives the serial result bit for bit. Workers find a
-synthesis reduction in the disk cache (:func:`vtb.synthesis.cache_dir`; on a cluster, point
+synthesis reduction in the disk cache (:func:`vtb.run.synthesis.cache_dir`; on a cluster, point
 ``VTB_CACHE_DIR`` at shared storage) and keep it in memory for their later tasks.
 
 :func:`local_cluster` starts a Dask cluster on this machine set up for studies

@@ -161,7 +161,7 @@ class Result:
         return t, x
 
     def spectrum(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, nperseg: Optional[int] = None) -> tuple[np.ndarray, np.ndarray]:
-        """One-sided PSD (Welch, Hann window, half-overlapping segments; :mod:`vtb.spectra`) of
+        """One-sided PSD (Welch, Hann window, half-overlapping segments; :mod:`vtb.analysis.spectra`) of
         :meth:`series`: (f in Hz, PSD in (m/s²)²/Hz or m²/Hz)."""
         t, x = self.series(layer, quantity, point, window)
         return psd(x, 1.0 / self.config.solver.dt, nperseg)
@@ -170,7 +170,7 @@ class Result:
         """Energy-true IEC 61260-1 one-third-octave band levels of :meth:`series` over the
         analysis ``window`` (s; the whole run by default), in dB re 1e−6 m/s² (acceleration) or
         1e−9 m (displacement), with the equivalent level ``leq`` and the exposure level
-        ``exposure`` (dB) over it; see :func:`vtb.spectra.third_octave`. A passage is a
+        ``exposure`` (dB) over it; see :func:`vtb.analysis.spectra.third_octave`. A passage is a
         transient, so these (not Welch's, :meth:`welch_third_octave`) are its band levels. Bands
         beyond the band the run resolves for the layer (:func:`vtb.resolved_band`) warn
         (:class:`vtb.ResolutionWarning`)."""
@@ -178,7 +178,7 @@ class Result:
 
     def welch_third_octave(self, layer: str, quantity: str = "acc", point: int = 0, window: Optional[tuple] = None, **options) -> dict:
         """One-third-octave band levels of :meth:`series` by Welch's PSD, for a stationary part
-        of a run (:func:`vtb.spectra.welch_third_octave`); warns as :meth:`third_octave`."""
+        of a run (:func:`vtb.analysis.spectra.welch_third_octave`); warns as :meth:`third_octave`."""
         return self._bands(welch_third_octave, layer, quantity, point, window, **options)
 
     def _bands(self, method, layer: str, quantity: str, point: int, window, **options) -> dict:
@@ -191,9 +191,9 @@ class Result:
     def comfort(self, car: int = 0, window: Optional[tuple] = None) -> dict:
         """Ride-comfort indices of a car body's vertical acceleration, optionally over an
         analysis ``window`` (t0, t1) in s: ISO 2631-1's Wk-weighted r.m.s. ``a_w`` and ``mtvv``
-        (m/s², with ``mtvv_ratio`` and ``duration`` in s; :func:`vtb.comfort.iso2631`) and
-        Sperling's ``wz`` (dimensionless; :func:`vtb.comfort.sperling`). Short records warn
-        (:class:`vtb.comfort.ComfortWarning`)."""
+        (m/s², with ``mtvv_ratio`` and ``duration`` in s; :func:`vtb.analysis.comfort.iso2631`) and
+        Sperling's ``wz`` (dimensionless; :func:`vtb.analysis.comfort.sperling`). Short records warn
+        (:class:`vtb.analysis.comfort.ComfortWarning`)."""
         if isinstance(car, bool) or not isinstance(car, int) or not 0 <= car < self.vehicle_acc.shape[1]:
             raise config_error("car", car, f"must index one of the {self.vehicle_acc.shape[1]} cars")
         a, t = self.vehicle_acc[:, car, 0], self.t

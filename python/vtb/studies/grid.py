@@ -5,8 +5,8 @@ their dotted paths (``"speed"``, ``"tids.stiffness"``, ``"structure.couplings[0]
 ``"irregularity.seed"``; the aliases of :data:`ALIASES` name the dampers' b_t, k_t, c_t) and
 reports the indices named (``output.indices``: every index the core computes for the
 configuration, :func:`index_names`). Its runs are lockstep batches in Rust or tasks on any
-:class:`concurrent.futures.Executor`, Dask's included (:mod:`vtb.scaleout`); with ``out=``
-every finished case is journaled as soon as its group finishes (:mod:`vtb.journal`), and a
+:class:`concurrent.futures.Executor`, Dask's included (:mod:`vtb.run.scaleout`); with ``out=``
+every finished case is journaled as soon as its group finishes (:mod:`vtb.studies.journal`), and a
 re-run with the same path runs only the cases the journal lacks.
 
 The article's TID sweep (:func:`vtb.sweep`) is this study over ``b_t, k_t, c_t`` with the
@@ -291,11 +291,11 @@ def study(
     before any run.
 
     Runs: one Rust batch on ``threads`` cores (lockstep groups, each group's cases reported as
-    it finishes), or tasks of ``chunk`` cases on ``executor`` (:mod:`vtb.scaleout`). A failing
+    it finishes), or tasks of ``chunk`` cases on ``executor`` (:mod:`vtb.run.scaleout`). A failing
     case is recorded with its reason and the study goes on. ``progress``: a tqdm bar (True),
     none (False) or ``f(done, total)``.
 
-    ``out``: a CSV journal (:mod:`vtb.journal`; ``.parquet``: the journal is ``out + ".csv"``
+    ``out``: a CSV journal (:mod:`vtb.studies.journal`; ``.parquet``: the journal is ``out + ".csv"``
     and the Parquet table is written at the end). Each finished case is appended as soon as its
     group finishes; a re-run with the same path runs only the cases the journal lacks (keyed by
     their values, so an extended grid runs only the new ones; failed cases are retried). The

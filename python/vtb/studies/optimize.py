@@ -40,7 +40,7 @@ def checkpoint_identity(config: Config, baseline, checkpoint=None, **extra) -> d
     """What an optimisation's evaluations depend on, for its checkpoint: the configuration's
     stamp, a hash of its uncontrolled metrics (``baseline``) and any ``extra`` JSON values.
     When ``checkpoint`` (or its designs journal) already holds the stamp of the same
-    configuration written by an earlier schema (:func:`vtb.journal.same_config`), that stamp is
+    configuration written by an earlier schema (:func:`vtb.studies.journal.same_config`), that stamp is
     adopted, so a field added to the schema since does not make the checkpoint stale."""
     stamp = json.loads(config_stamp(config))
     if checkpoint is not None:
@@ -106,7 +106,7 @@ class DesignJournal:
 
     def run(self, X: np.ndarray, configs_of, row_of, threads: Optional[int], executor=None) -> None:
         """Runs every design of X not yet known, in one batch (or tasks on ``executor``,
-        :mod:`vtb.scaleout`): ``configs_of(x)`` gives its configurations, ``row_of(k, result)``
+        :mod:`vtb.run.scaleout`): ``configs_of(x)`` gives its configurations, ``row_of(k, result)``
         the row of its k-th run (a metrics dict or an exception); a design is added once all
         its runs are in."""
         todo = [x for x in dict.fromkeys(map(tuple, X)) if x not in self.cache]
