@@ -37,7 +37,7 @@ from ..run.tables import frame, to_parquet, units_of
 from ..studies import journal as jr
 from ..studies.grid import result_of
 from ..studies.journal import config_stamp
-from ..studies.optimize import DesignEvaluator, DesignJournal, checkpoint_identity
+from ..studies.optimize import DesignEvaluator, checkpoint_identity
 from .tid_problem import LAYOUT, OptimizationResult, Setup, SweepResult, case_config, case_rows, plan, recording_metrics, with_dampers
 
 #: First seed of the samples a design is chosen on.
@@ -418,9 +418,6 @@ class RobustEvaluator(DesignEvaluator):
     todo: list
     baselines: list
     statistic: str
-    threads: Optional[int] = None
-    designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
-    executor: object = None
     n_obj = len(ARTICLE_OBJECTIVES)
     n_constr = len(CONSTRAINTS)
 
@@ -525,7 +522,7 @@ def setup(config: Config, samples, speeds, statistic_name: str, warm_start, thre
                 raise VtbError(f"the uncontrolled run at speed {v:g} m/s, seed {s} failed: {_error_text(r)}")
         baselines = [{m: float(r[m]) for m in METRICS} for r in runs]
     identity = checkpoint_identity(config, baselines, checkpoint, cases=[(v, s) for v, s, _ in todo], statistic=statistic_name)
-    evaluator = RobustEvaluator(config, todo, baselines, statistic_name, threads, executor=executor)
+    evaluator = RobustEvaluator(config, todo, baselines, statistic_name, threads=threads, executor=executor)
     initial = None
     if warm_start is not None:
         X0 = np.array(warm_start.designs).reshape(-1, 3)

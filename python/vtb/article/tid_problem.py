@@ -191,7 +191,7 @@ def tid_objectives(config: Config, baseline: dict, threads: Optional[int] = None
     :data:`CONSTRAINTS` against the uncontrolled ``baseline``), recording :data:`METRICS`; a
     failed run scores 10 × the uncontrolled objectives."""
     return CaseEvaluator(config, tuple(ARTICLE_VARIABLES), ARTICLE_OBJECTIVES, tuple((m, baseline[m]) for m in CONSTRAINTS), METRICS,
-                         tuple(10 * baseline[m] for m in ARTICLE_OBJECTIVES), threads, executor=executor)
+                         tuple(10 * baseline[m] for m in ARTICLE_OBJECTIVES), threads=threads, executor=executor)
 
 
 @dataclasses.dataclass

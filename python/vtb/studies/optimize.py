@@ -124,16 +124,19 @@ class DesignJournal:
 
         run_cases([c for cs in per for c in cs], done, executor=executor, threads=threads)
 
+@dataclasses.dataclass
 class DesignEvaluator:
     """What turns a generation's designs (X rows, natural units) into objectives F and
     constraints G (pymoo's Evaluator): every design not yet known runs its configurations
-    (:meth:`configs_of`), all of a generation in one batch or as tasks on ``executor``
-    (:mod:`vtb.run.scaleout`); the row of each run (:meth:`row_of`) is kept in ``designs``, a
-    design journaled as soon as all its runs are in, and :meth:`score` makes its F and G.
+    (:meth:`configs_of`), all of a generation in one batch on ``threads`` cores or as tasks on
+    ``executor`` (:mod:`vtb.run.scaleout`); the row of each run (:meth:`row_of`) is kept in
+    ``designs``, a design journaled as soon as all its runs are in, and :meth:`score` makes its
+    F and G. A subclass is a dataclass (it pickles to workers) that defines ``n_obj``,
+    ``n_constr``, :meth:`configs_of`, :meth:`row_of` and :meth:`score`."""
 
-    A subclass is a dataclass with ``threads``, ``designs`` (:class:`DesignJournal`) and
-    ``executor`` (so that it pickles to workers) and defines ``n_obj``, ``n_constr``,
-    :meth:`configs_of`, :meth:`row_of` and :meth:`score`."""
+    threads: Optional[int] = dataclasses.field(default=None, kw_only=True)
+    designs: DesignJournal = dataclasses.field(default_factory=DesignJournal, kw_only=True)
+    executor: object = dataclasses.field(default=None, kw_only=True)
 
     @property
     def cache(self) -> dict:
@@ -174,9 +177,6 @@ class CaseEvaluator(DesignEvaluator):
     constraints: tuple
     record: tuple
     failed: tuple
-    threads: Optional[int] = None
-    designs: DesignJournal = dataclasses.field(default_factory=DesignJournal)
-    executor: object = None
 
     @property
     def n_obj(self) -> int:
@@ -314,7 +314,7 @@ def optimize_fields(config: Config, variables: dict, objectives, constraints, re
         if m not in names:
             raise config_error("report", m, f"not an index of this configuration (known: {', '.join(names)})")
     failed = tuple(10 * abs(ref[m]) if ref and ref[m] else 1e300 for m in objectives)
-    evaluator = CaseEvaluator(base, paths, objectives, tuple(cons), record, failed, threads, executor=executor)
+    evaluator = CaseEvaluator(base, paths, objectives, tuple(cons), record, failed, threads=threads, executor=executor)
     identity = checkpoint_identity(base, ref, checkpoint, paths=list(paths), objectives=list(objectives), constraints=[list(c) for c in cons], record=list(record))
     hv_ref = tuple(ref[m] for m in objectives) if ref is not None and len(objectives) == 2 else None
     res, X, design_rows = solve(evaluator, [s[1] for s in spec], [s[2] for s in spec], [s[3] for s in spec], algorithm=algorithm,
