@@ -20,6 +20,7 @@ from .. import _core
 from ..config.fields import Config, structure_json
 from ..errors import config_error
 
+
 @dataclass
 class System:
     """The assembled structure of one configuration (sparse CSC matrices)."""

@@ -110,8 +110,6 @@ def cases(config: Config, samples, speeds: Optional[Sequence[float]], first: int
     return out
 
 
-
-
 def _case_row(speed: float, seed: int, m0: Optional[dict], m1: Optional[dict], error: str = "") -> dict:
     """One case of a design: every metric uncontrolled (``m0``) and controlled (``m1``), the
     reduction rates and the constraint check; ``error`` (a failed run): NaN indices,

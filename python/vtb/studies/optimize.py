@@ -36,6 +36,7 @@ from ..run.tables import frame, to_parquet, units_of
 from .grid import get_field, set_field, with_tids
 from .journal import config_stamp, same_config
 
+
 def checkpoint_identity(config: Config, baseline, checkpoint=None, **extra) -> dict:
     """What an optimisation's evaluations depend on, for its checkpoint: the configuration's
     stamp, a hash of its uncontrolled metrics (``baseline``) and any ``extra`` JSON values.
@@ -53,6 +54,7 @@ def checkpoint_identity(config: Config, baseline, checkpoint=None, **extra) -> d
         **extra,
     }}
 
+
 def _saved_stamp(checkpoint: Path):
     """The configuration stamp of the identity a checkpoint (or, before its first generation,
     its designs journal) was written with; ``None`` if there is none to read (the optimiser
@@ -69,6 +71,7 @@ def _saved_stamp(checkpoint: Path):
         return identity["problem"]["vtb.optimize"]["config"]
     except (TypeError, KeyError):
         return None
+
 
 @dataclasses.dataclass
 class DesignJournal:
@@ -123,6 +126,7 @@ class DesignJournal:
                 self.add(todo[d], got[d])
 
         run_cases([c for cs in per for c in cs], done, executor=executor, threads=threads)
+
 
 @dataclasses.dataclass
 class DesignEvaluator:
@@ -208,6 +212,7 @@ class CaseEvaluator(DesignEvaluator):
     def score(self, rows: list) -> tuple:
         return self.fg(rows[0])
 
+
 def solve(evaluator: DesignEvaluator, lower, upper, log_scale, *, algorithm: str, pop_size: int, n_gen: int, seed, progress,
           hv_ref, stop_hv, checkpoint, identity: dict, initial: Optional[tuple] = None, **options) -> tuple:
     """Minimises what ``evaluator`` scores over the box [``lower``, ``upper``] (``log_scale``:
@@ -272,6 +277,7 @@ def _problem_spec(config: Config, variables, objectives, constraints, reference)
     cons = [(m, ref[m] if b == "reference" else float(b)) for m, b in cons]
     return spec, tuple(objectives), tuple(cons), ref
 
+
 @dataclasses.dataclass
 class ParetoResult:
     """The returned (feasible, non-dominated) designs of :func:`optimize` over user-named
@@ -297,6 +303,7 @@ class ParetoResult:
     def to_parquet(self, path) -> None:
         """Parquet export of :meth:`to_pandas` (needs pyarrow)."""
         to_parquet(self.to_pandas(), path)
+
 
 def optimize_fields(config: Config, variables: dict, objectives, constraints, reference: Optional[dict], report, *, pop_size: int,
                     n_gen: int, seed: int, algorithm: str, threads: Optional[int], executor, progress, stop_hv, checkpoint,
