@@ -4,7 +4,7 @@ this process on every core; the speed-up from one worker to two, measured in one
 
     python benches/bench_dask.py [--samples 8] [--t-end 0.6] [--repeat 3]
 
-Both clusters start together (``vtb.scaleout.local_cluster``: Dask set up for studies) and
+Both clusters start together (``vtb.run.scaleout.local_cluster``: Dask set up for studies) and
 each worker loads the cached reduction before the clock starts; then the study runs ``--repeat`` times on each, alternating between
 them so that the machine's load (it is shared) falls on both alike, and each keeps its best
 time. Prints every time, the speed-up of the best times and whether the results are bit for
@@ -18,8 +18,8 @@ import time
 import numpy as np
 
 import vtb
-from vtb.scaleout import local_cluster
-from vtb.tid_sweep import COLUMNS
+from vtb.run.scaleout import local_cluster
+from vtb.article.tid_problem import COLUMNS
 
 
 def study(cfg, samples, executor=None, threads=None):

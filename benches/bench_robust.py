@@ -15,7 +15,7 @@ import argparse
 import time
 
 import vtb
-from vtb import robust
+from vtb.article import robust
 
 p = argparse.ArgumentParser()
 p.add_argument("--samples", type=int, default=8)

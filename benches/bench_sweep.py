@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 import vtb
-from vtb.tid_sweep import sweep_report
+from vtb.article.tid_sweep import sweep_report
 
 p = argparse.ArgumentParser()
 p.add_argument("--out", default="benches/results/sweep_article.csv")

@@ -215,7 +215,7 @@ def case_robust_sweep():
 def case_optimiser_resume():
     c = short(0.03)
     c.tids = vtb.tids_around(c, count=2)
-    import vtb.scaleout as so
+    import vtb.run.scaleout as so
 
     class Killed(Exception):
         pass
@@ -253,7 +253,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     os.environ.setdefault("VTB_CACHE", a.cache)
     try:
-        from vtb import synthesis
+        from vtb.run import synthesis
 
         os.environ[synthesis.CACHE_ENV] = a.cache
     except (ImportError, AttributeError):

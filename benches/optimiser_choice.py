@@ -1,5 +1,5 @@
 """Evidence for the reproduction's default optimiser: the article's TID problem (NSGA-II,
-population 100, at most 100 generations, the hypervolume stop ``vtb.reproduce.STOP_HV``) run
+population 100, at most 100 generations, the hypervolume stop ``vtb.article.reproduce.STOP_HV``) run
 from a cold (random) start and from a warm start (the reproduction's sweep) over several seeds,
 with the hypervolume of the feasible front against the evaluations.
 
@@ -8,7 +8,7 @@ with the hypervolume of the feasible front against the evaluations.
 Each finished run is recorded in ``OUT/runs.json`` at once, and every generation is
 checkpointed under ``--work`` (default benches/results/optimiser_choice), so a stopped bench
 resumes: finished runs are not repeated, an unfinished one continues after its last generation.
-Both starts run as ``vtb reproduce --optimiser cold|warm`` does (``vtb.reproduce.optimisations``'
+Both starts run as ``vtb reproduce --optimiser cold|warm`` does (``vtb.article.reproduce.optimisations``'
 options: the same stop, the warm start from the reproduction's sweep journal, whose points come
 in (b_t, k_t, c_t) order as the sweep's own). ``--report-only`` rewrites the report from
 ``runs.json``.
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import vtb
 from vtb.machine import describe
-from vtb.reproduce import STOP_HV
+from vtb.article.reproduce import STOP_HV
 
 REPRO = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
 STARTS = ("cold", "warm")
@@ -99,7 +99,7 @@ def stopped_at(history, tol: float, window: int):
     have stopped a run of this history, or ``None`` within the recorded generations."""
     hv = [h for _, h in history]
     for g in range(window + 1, len(hv) + 1):
-        if vtb.moga.hypervolume_settled(hv[:g], tol, window):
+        if vtb.optim.hypervolume_settled(hv[:g], tol, window):
             return g, history[g - 1][0], hv[g - 1]
     return None
 
@@ -124,10 +124,10 @@ def stop_table(runs: list) -> list:
 
 
 def report(out: Path, runs: list, n_seeds: int) -> None:
-    from vtb.plotting import plot_hypervolume
+    from vtb.analysis.plotting import plot_hypervolume
 
     runs = sorted(runs, key=lambda r: (r["start"], r["seed"]))
-    hists = {f"{s} start": [[vtb.moga.Generation(gen=i + 1, n_evals=n, n_feasible=0, n_front=0, cv_min=0.0, hypervolume=hv) for i, (n, hv) in enumerate(r["history"])]
+    hists = {f"{s} start": [[vtb.optim.Generation(gen=i + 1, n_evals=n, n_feasible=0, n_front=0, cv_min=0.0, hypervolume=hv) for i, (n, hv) in enumerate(r["history"])]
                             for r in runs if r["start"] == s] for s in STARTS}
     fig = plot_hypervolume({k: v for k, v in hists.items() if v})
     for suffix in ("png", "pdf"):

@@ -18,7 +18,8 @@ import warnings
 import numpy as np
 
 import vtb
-from vtb import synthesis, track
+from vtb.run import synthesis
+from vtb.analysis import eigen
 from vtb.machine import describe
 
 warnings.simplefilter("ignore", vtb.ResolutionWarning)
@@ -51,8 +52,8 @@ def worst_band(a, ref) -> float:
 def expansions(c, x):
     """The modal sum and the residual's moments r₀, r₁, r₂ at x (point load and response)."""
     red = synthesis.reduction(c)
-    system = track._assemble(synthesis._structure_config(c))
-    s = track._shape_matrix(system, 0, np.array([x])).toarray()[:, 0]
+    system = eigen.assemble(synthesis._structure_config(c))
+    s = eigen.shape_matrix(system, 0, np.array([x])).toarray()[:, 0]
     p = red.project(s)
     term = p * p
     iw = 2j * math.pi * F[:, None]

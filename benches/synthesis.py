@@ -28,8 +28,8 @@ import warnings
 import numpy as np
 
 import vtb
-from vtb import synthesis
-from vtb.simulate import DEFAULT_LANES, SYNTHESIS_LANES
+from vtb.run import synthesis
+from vtb.run.simulate import DEFAULT_LANES, SYNTHESIS_LANES
 from vtb.machine import describe
 
 warnings.simplefilter("ignore", vtb.ResolutionWarning)

@@ -8,7 +8,7 @@ allows (the indices warn when it is short).
 import warnings
 
 import vtb
-from vtb import comfort
+from vtb.analysis import comfort
 
 
 def main():
@@ -25,7 +25,7 @@ def main():
             print(f"  warning: {w.message}")
     print(f"ISO 2631-1 wants about {comfort.MIN_RMS_RECORD:g} s for a_w, Sperling about {comfort.MIN_SPERLING_RECORD:g} s: "
           "a single crossing of a 160 m bridge rates that crossing, not a journey.")
-    b = vtb.spectra.third_octave(res.car_body_acc, 1.0 / cfg.solver.dt)
+    b = vtb.analysis.spectra.third_octave(res.car_body_acc, 1.0 / cfg.solver.dt)
     i = int(b["level"].argmax())
     print(f"car body: strongest one-third-octave band {b['nominal'][i]:g} Hz at {b['level'][i]:.1f} dB re 1e-6 m/s² "
           f"(bands from {b['nominal'][0]:g} Hz, the lowest this record resolves)")

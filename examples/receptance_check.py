@@ -47,7 +47,7 @@ def main(argv=None):
         rates[name] = vtb.decay_rate(cfg, FREQUENCIES[::6], x0=mid)
 
     if args.out:
-        from vtb import plotting
+        from vtb.analysis import plotting
 
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)

@@ -14,7 +14,7 @@ import argparse
 import warnings
 
 import vtb
-from vtb.comfort import ComfortWarning
+from vtb.analysis.comfort import ComfortWarning
 
 SPEEDS = [60.0, 70.0, 80.0, 90.0]  # m/s
 
@@ -46,7 +46,7 @@ def main(argv=None):
 
         import matplotlib
 
-        from vtb import plotting
+        from vtb.analysis import plotting
 
         # One journal column (85 mm) in the package's type sizes (vtb.plotting).
         with matplotlib.rc_context(plotting.STYLE):

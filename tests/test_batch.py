@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb.tid_sweep import case_config
+from vtb.article.tid_problem import case_config
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +102,7 @@ def test_ctrl_c_stops_a_long_batch_within_a_second(default_sigint):
 
 
 def test_runs_on_one_sample_share_its_profile_which_is_the_sample_drawn_afresh(monkeypatch):
-    from vtb.simulate import irregularity_profile
+    from vtb.config.prepare import irregularity_profile
 
     a = vtb.paper_config()
     a.irregularity.seed = 11
@@ -117,7 +117,7 @@ def test_runs_on_one_sample_share_its_profile_which_is_the_sample_drawn_afresh(m
     x0, dx, values, _ = a.irregularity.sample(0.0, a.structure.length)  # drawn afresh, no cache
     assert (pa.x0, pa.dx) == (x0, dx) and np.array_equal(pa.values, values)
     # a cache too small for two keeps the newest only, and gives the same profiles
-    monkeypatch.setattr(sys.modules["vtb.simulate"], "PROFILE_CACHE_BYTES", pa.values.nbytes)
+    monkeypatch.setattr(sys.modules["vtb.config.prepare"], "PROFILE_CACHE_BYTES", pa.values.nbytes)
     d = a.copy()
     d.irregularity.seed = 13
     irregularity_profile(d)  # inserting d's leaves it alone in the cache
@@ -128,7 +128,7 @@ def test_runs_on_one_sample_share_its_profile_which_is_the_sample_drawn_afresh(m
 def test_a_shared_profile_gives_its_warning_at_every_run():
     """A sample too short for its band warns when it is drawn, and again when a later run
     takes it from the process's cache."""
-    from vtb.simulate import irregularity_profile
+    from vtb.config.prepare import irregularity_profile
 
     c = vtb.paper_config()
     c.irregularity = vtb.Irregularity(kind="german_low", wavelength_min=2.0, wavelength_max=400.0, seed=5)

@@ -76,7 +76,7 @@ def test_simulate_says_what_it_runs_and_how_it_relates_to_the_article():
     irregularity level, and that the article's published numbers need the calibrated level;
     `--config article` says which number is fitted and which are out-of-sample."""
     import vtb
-    from vtb.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config
+    from vtb.config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config
 
     raw = "\n".join(cli._describe(vtb.paper_config(), "default"))
     assert "FE–SEA hybrid" in raw and "level ×1" in raw

@@ -9,7 +9,7 @@ import pytest
 
 import vtb
 from fuzz_cases import small_config
-from vtb import comfort
+from vtb.analysis import comfort
 
 #: ISO 2631-1:1997 Table 3, Wk × 1000 at the nominal one-third-octave frequencies (Hz).
 ISO_2631_WK = {

@@ -61,11 +61,11 @@ def test_lockstep_jobs_on_patches_give_the_bits_of_single_runs():
     # The patch's port vectors are shared by the lanes of a batch (the patch of the static
     # load): jobs with different dampers and samples give bit for bit their single runs, and
     # their band-limited indices too.
-    from vtb.tid_sweep import case_config
+    from vtb.article.tid_problem import case_config
 
     base = converged_short(True, t_end=0.01)
     base.output.band_limit = 2000.0
-    base.irregularity = vtb.paper_irregularity(scale=vtb.presets.PAPER_CALIBRATED_SCALE)
+    base.irregularity = vtb.paper_irregularity(scale=vtb.config.presets.PAPER_CALIBRATED_SCALE)
     base.tids = vtb.tids_around(base, count=2, x=21.2)
     jobs = [case_config(base, *p) for p in ((5.0, 2e8, 1e3), (3.0, 1e8, 10.0), (8.0, 4e8, 1e4))]
     jobs[2].irregularity.seed = 11

@@ -10,7 +10,7 @@ from scipy.signal import argrelextrema
 
 import vtb
 from vtb import ConfigError, Irregularity
-from vtb.irregularity import wheel_centre_path
+from vtb.config.irregularity import wheel_centre_path
 
 R = 0.46  # the article car's wheel radius (m)
 

@@ -146,7 +146,7 @@ def test_no_page_or_generated_report_carries_an_absolute_path():
 
 
 def test_the_scaleout_page_gives_hand_started_workers_the_study_settings():
-    from vtb.scaleout import dask_environment
+    from vtb.run.scaleout import dask_environment
 
     text = (ROOT / "docs" / "scaleout.md").read_text()
     for k, v in dask_environment().items():

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from vtb import irregularity as irr
+from vtb.config import irregularity as irr
 from vtb.errors import ConfigError
-from vtb.irregularity import Irregularity
+from vtb.config.irregularity import Irregularity
 
 SPECTRA = ["tbt3352", "sato", "iso3095", "german_low", "german_high", "fra1", "fra6"]
 

@@ -6,9 +6,10 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pytest
 
-from vtb import moga
+from vtb import optim as moga
+from vtb.optim import gamultiobj
 from vtb.errors import ConfigError
-from vtb.moga import (
+from vtb.optim import (
     Problem, asf, crowding_distance, hypervolume_2d, igd, igd_plus, knee_point, min_distance_to_ideal,
     minimize, non_dominated_sort,
 )
@@ -218,12 +219,12 @@ def test_trade_off_selection_by_hand():
 def test_front_quota():
     """First front capped at floor(0.35 N), the rest shared geometrically; if the later fronts
     are too small the first front exceeds its cap."""
-    quota = moga._front_quota(np.array([80, 50, 40, 30]), 100, 0.35)
+    quota = gamultiobj._front_quota(np.array([80, 50, 40, 30]), 100, 0.35)
     assert quota.sum() == 100 and quota[0] == 35
     assert np.all(np.diff(quota[1:]) <= 0) and np.all(quota <= [80, 50, 40, 30])
-    quota = moga._front_quota(np.array([150, 10, 5]), 100, 0.35)
+    quota = gamultiobj._front_quota(np.array([150, 10, 5]), 100, 0.35)
     assert quota.tolist() == [85, 10, 5]
-    quota = moga._front_quota(np.array([20, 60, 60]), 100, 0.35)
+    quota = gamultiobj._front_quota(np.array([20, 60, 60]), 100, 0.35)
     assert quota[0] == 20 and quota.sum() == 100
 
 

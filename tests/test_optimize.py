@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import moga, scaleout
-from vtb.presets import ARTICLE_RAIL_ACC
+from vtb import optim as moga
+from vtb.run import scaleout
+from vtb.config.presets import ARTICLE_RAIL_ACC
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -32,7 +33,7 @@ def test_pareto_set_is_feasible_non_dominated_and_in_bounds(result):
 
 def test_pareto_metrics_are_those_of_a_fresh_run(short, result):
     c = result.chosen("best η_r")
-    cfg = vtb.tid_sweep.case_config(short, c["b_t"], c["k_t"], c["c_t"])
+    cfg = vtb.article.tid_problem.case_config(short, c["b_t"], c["k_t"], c["c_t"])
     m = vtb.simulate(cfg).metrics()
     i = result.trade_offs()["best η_r"]
     assert result.pareto["rail_acc_max"][i] == m["rail_acc_max"]
@@ -65,10 +66,13 @@ def test_calibrated_preset_matches_the_article_rail_amplitude():
 import inspect
 import sys
 
-from vtb import cli, reproduce
-from vtb.optimize import tid_objectives, warm_start_points
+from vtb import cli
 
-OPT = sys.modules["vtb.optimize"]  # the module (vtb.optimize is the function)
+from vtb.article import reproduce
+from vtb.article.tid_optimize import warm_start_points
+from vtb.article.tid_problem import tid_objectives
+
+OPT = sys.modules["vtb.studies.optimize"]  # the module (vtb.optimize is the function)
 
 
 class Killed(Exception):
@@ -227,7 +231,7 @@ def test_a_warm_start_does_not_depend_on_the_journals_line_order(short, result, 
     stamp, header, rows = lines[0], lines[1], lines[2:]
     shuffled = tmp_path / "shuffled.csv"
     shuffled.write_text("\n".join([stamp, header, *rows[::-1]]) + "\n")
-    in_order = warm_start_points(vtb.tid_sweep.read_journal(swept), short, result.baseline)
+    in_order = warm_start_points(vtb.article.tid_problem.read_journal(swept), short, result.baseline)
     reversed_ = warm_start_points(shuffled, short, result.baseline)
     for a, b in zip(in_order[:3], reversed_[:3]):
         assert np.array_equal(a, b)
@@ -244,7 +248,7 @@ def test_warm_started_optimisation_uses_the_sweep(short, swept, monkeypatch):
     assert a.moga.history[0].n_evals == 2 and calls[0] == 2 and a.moga.n_evals == 2 + 6
     assert np.any((a.pareto["k_t"] == 1e8) & (a.pareto["c_t"] == 1e3))  # a sweep case on the front
     assert sum(calls) == a.moga.n_evals
-    b = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=vtb.tid_sweep.read_journal(swept))
+    b = vtb.optimize(short, pop_size=6, n_gen=2, seed=0, progress=False, warm_start=vtb.article.tid_problem.read_journal(swept))
     _same_optimisation(a, b)
 
 
@@ -266,7 +270,7 @@ def test_a_journal_computed_by_other_numerics_is_stale(short, swept):
     """A journal whose uncontrolled run no longer equals a fresh one (written by another vtb
     version) is a StaleFileError naming the journal, which --force sets aside and reruns; the
     same sweep held in memory only is a plain ConfigError."""
-    sw = vtb.tid_sweep.read_journal(swept)
+    sw = vtb.article.tid_problem.read_journal(swept)
     assert sw.journal == str(swept)
     sw.columns["rail_acc_max"][0] *= 1.0 + 1e-12  # the baseline of other numerics
     with pytest.raises(vtb.StaleFileError, match="differs") as e:
@@ -301,7 +305,7 @@ def test_reproduction_records_hypervolume_against_evaluations(short, swept, tmp_
     evaluations and hypervolume of each run, the warm run's first generation free."""
     import csv
 
-    sw = vtb.tid_sweep.read_journal(swept)
+    sw = vtb.article.tid_problem.read_journal(swept)
     runs = reproduce.optimisations(short, sw, tmp_path, dict(pop_size=4, n_gen=2), seed=0, optimiser="both", progress=False)
     with open(tmp_path / "optimisation_history.csv") as f:
         rows = list(csv.DictReader(f))
@@ -377,11 +381,11 @@ def test_the_reproductions_default_optimiser_is_the_one_the_seeds_chose():
 
 
 def test_a_stamp_is_compared_through_todays_schema(short):
-    """vtb.journal.same_config: a stamp lacking a field added since is the same configuration;
+    """vtb.studies.journal.same_config: a stamp lacking a field added since is the same configuration;
     one holding another value, or one that no longer parses, is not."""
     import json
 
-    from vtb.journal import config_stamp, same_config
+    from vtb.studies.journal import config_stamp, same_config
 
     stamp = json.loads(config_stamp(short))
     assert same_config(json.dumps(stamp), short)

@@ -41,7 +41,7 @@ def test_each_car_has_its_ride_comfort(two_cars):
     cfg, res = two_cars
     m = res.metrics()
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", vtb.comfort.ComfortWarning)
+        warnings.simplefilter("ignore", vtb.analysis.comfort.ComfortWarning)
         assert m["car_comfort_aw"] == pytest.approx(res.comfort(car=0)["a_w"], rel=1e-8)
         assert m["car1_comfort_aw"] == pytest.approx(res.comfort(car=1)["a_w"], rel=1e-8)
     assert m["car1_comfort_aw"] != m["car_comfort_aw"]

@@ -17,12 +17,12 @@ from fuzz_cases import small_config
 pytest.importorskip("matplotlib")
 from matplotlib.text import Text  # noqa: E402
 
-from vtb import plotting  # noqa: E402
+from vtb.analysis import plotting  # noqa: E402
 
 
 def test_importing_plotting_keeps_the_users_backend(tmp_path):
     code = (
-        "import matplotlib; matplotlib.use('svg'); import vtb.plotting, vtb.reproduce, vtb.robust_study; "
+        "import matplotlib; matplotlib.use('svg'); import vtb.analysis.plotting, vtb.reproduce, vtb.robust_study; "
         "import matplotlib.pyplot as plt; f = plt.figure(); f.savefig(r'" + str(tmp_path / "x.svg") + "'); "
         "print(matplotlib.get_backend())"
     )

@@ -65,7 +65,7 @@ def test_cli_version_and_units(tmp_path, capsys):
 def test_validate_writes_its_real_command(tmp_path, monkeypatch):
     import types
 
-    import vtb.validation as validation
+    import vtb.article.validation as validation
 
     seen = {}
     case = types.SimpleNamespace(label=validation.REFERENCE, values={("raw", None): None}, seconds={("raw", None): 0.0})

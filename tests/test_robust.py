@@ -8,7 +8,8 @@ import pytest
 
 import vtb
 from fuzz_cases import small_config
-from vtb import robust, scaleout
+from vtb.article import robust
+from vtb.run import scaleout
 
 
 def test_statistics_and_the_standard_error_follow_their_definitions():
@@ -138,7 +139,7 @@ def test_robust_optimisation_ranks_designs_by_the_statistic_over_the_cases():
         assert max(G) <= 0.0  # the returned set is feasible under the statistic's constraints
     # the hypervolume is that of the front in (ratio_rail, ratio_slab) against (1, 1)
     F = np.column_stack([res.pareto["ratio_rail_acc_max"], res.pareto["ratio_slab_acc_max"]])
-    assert res.moga.history[-1].hypervolume == pytest.approx(vtb.moga.hypervolume_2d(F, (1.0, 1.0)))
+    assert res.moga.history[-1].hypervolume == pytest.approx(vtb.optim.hypervolume_2d(F, (1.0, 1.0)))
     # per-speed optimum: the brute-force minimum over every evaluated design
     for v in speeds:
         t = res.evaluated_table(speed=v)
@@ -162,7 +163,7 @@ def test_robust_studies_refuse_what_they_cannot_do():
 
 
 def test_the_timoshenko_pinned_pinned_frequency_is_the_beam_equations_root():
-    from vtb.tid_sweep import pinned_pinned_frequency
+    from vtb.config.resolution import pinned_pinned_frequency
 
     article, conv = vtb.paper_config(), vtb.paper_config(model="converged")
     f_eb, f_t = pinned_pinned_frequency(article), pinned_pinned_frequency(conv)

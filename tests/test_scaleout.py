@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import scaleout
-from vtb.tid_sweep import COLUMNS, read_journal
+from vtb.run import scaleout
+from vtb.article.tid_problem import COLUMNS, read_journal
 
 distributed = pytest.importorskip("dask.distributed")
 
@@ -76,7 +76,7 @@ def test_every_study_gives_its_serial_result_on_a_cluster(short, cluster, tmp_pa
     assert r0.evaluated == r1.evaluated and r0.best() == r1.best()
     design = dict(b_t=5.0, k_t=2e8, c_t=1e3)
     e0 = vtb.evaluate_design(short, design, samples=2, speeds=[70.0, 80.0])
-    e1 = vtb.robust.evaluate_designs(short, [design], samples=2, speeds=[70.0, 80.0], executor=ex)[0]
+    e1 = vtb.article.robust.evaluate_designs(short, [design], samples=2, speeds=[70.0, 80.0], executor=ex)[0]
     assert e0.rows == e1.rows
 
 

@@ -10,8 +10,8 @@ import typing
 import pytest
 
 import vtb
-from vtb import config as C
-from vtb.schema import SCHEMA, description, properties
+from vtb.config import fields as C
+from vtb.config.schema import SCHEMA, description, properties
 
 #: Python class → the core struct it serialises to (the two Rayleigh forms are the variants
 #: of one tagged enum).
@@ -88,7 +88,7 @@ def test_python_classes_have_the_cores_fields_defaults_and_types(cls, struct):
         if name in has_default and "default" in prop:
             f = fields[name]
             value = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-            plain = C._to_plain(value)
+            plain = C.to_plain(value)
             assert plain == prop["default"], f"{struct}.{name}: Python {plain!r}, core {prop['default']!r}"
         want = _json_types(prop)
         got = _python_kind(hints[name])
@@ -114,7 +114,7 @@ def test_defaults_instances_serialise_to_the_cores_defaults():
     """The sub-tables a Config creates by default are the core's defaults as a whole."""
     cfg = vtb.paper_config()
     for name, cls in (("discretisation", C.Discretisation), ("solver", C.Solver), ("output", C.Output)):
-        assert C._to_plain(cls()) == properties("Config")[name]["default"], name
+        assert C.to_plain(cls()) == properties("Config")[name]["default"], name
     assert cfg.to_dict()["solver"].keys() == properties("SolverConfig").keys()
 
 
@@ -138,7 +138,7 @@ def _is_table(prop):
 @pytest.mark.parametrize("cls,struct", PAIRS, ids=[s for _, s in PAIRS])
 def test_every_field_is_documented_with_its_unit_in_one_place(cls, struct):
     """The core's doc comment is the one description of a field; the Python class's
-    docstring carries it (vtb.schema.documented)."""
+    docstring carries it (vtb.config.schema.documented)."""
     for name, prop in properties(struct).items():
         text = description(struct, name)
         assert text, f"{struct}.{name} has no doc comment"

@@ -11,7 +11,7 @@ import pytest
 
 import vtb
 from fuzz_cases import small_config
-from vtb import spectra
+from vtb.analysis import spectra
 
 FS = 20_000.0
 

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 
 import vtb
 from conftest import short_case
-from vtb import studies as studies_mod
-from vtb.optimize import ARTICLE_CONSTRAINTS, ARTICLE_OBJECTIVES, ARTICLE_VARIABLES
-from vtb.tid_sweep import METRICS
+from vtb.studies import grid as studies_mod
+from vtb.article.tid_problem import ARTICLE_CONSTRAINTS, ARTICLE_VARIABLES
+from vtb.run.indices import ARTICLE_OBJECTIVES, METRICS
 
 
 @pytest.fixture(scope="module")
@@ -190,7 +190,7 @@ def test_ride_comfort_is_a_core_index_equal_to_vtb_comfort(short):
     cfg.tids = None
     r = vtb.simulate(cfg)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", vtb.comfort.ComfortWarning)
+        warnings.simplefilter("ignore", vtb.analysis.comfort.ComfortWarning)
         whole = r.comfort()["a_w"]
         part = r.comfort(window=(0.020025, 0.090025))["a_w"]
     assert r.metrics()["car_comfort_aw"] == pytest.approx(whole, rel=1e-8)

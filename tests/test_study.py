@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import cli, scaleout
-from vtb import robust_study as study
+from vtb import cli
+from vtb.run import scaleout
+from vtb.article import robust_study as study
 
 
 @pytest.fixture(scope="module")

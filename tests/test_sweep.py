@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 import vtb
-from vtb import scaleout
-from vtb import studies as studies_mod
-from vtb import tid_sweep as sweep_mod
-from vtb.tid_sweep import COLUMNS, METRICS, SweepResult
+from vtb.run import scaleout
+from vtb.studies import grid as studies_mod
+from vtb.article import tid_problem, tid_sweep
+from vtb.article.tid_problem import COLUMNS, SweepResult
+from vtb.run.indices import METRICS
 
 GRID = dict(b_t=[2.0, 5.0], k_t=[1e8, 2e8], c_t=[1e3])
 
@@ -54,15 +55,15 @@ def test_grid_and_baseline(reference, short):
     assert list(c["case"]) == [0, 1, 2, 3, 4]
     assert math.isnan(c["b_t"][0]) and list(c["b_t"][1:]) == [2.0, 2.0, 5.0, 5.0]
     assert all(e == "" for e in c["error"])
-    base = vtb.simulate(sweep_mod.case_config(short, math.nan, 0, 0)).metrics()
+    base = vtb.simulate(tid_problem.case_config(short, math.nan, 0, 0)).metrics()
     assert reference.baseline["rail_acc_max"] == base["rail_acc_max"]
-    one = vtb.simulate(sweep_mod.case_config(short, 5.0, 2e8, 1e3)).metrics()
+    one = vtb.simulate(tid_problem.case_config(short, 5.0, 2e8, 1e3)).metrics()
     assert c["rail_acc_max"][4] == one["rail_acc_max"]
 
 
 def test_article_grid_has_1840_cases():
-    assert len(sweep_mod.grid(sweep_mod.ARTICLE_B, sweep_mod.ARTICLE_K, sweep_mod.ARTICLE_C)) == 1840
-    assert sweep_mod.ARTICLE_K[:3] == (1e4, 2e4, 3e4) and sweep_mod.ARTICLE_K[-2:] == (9e8, 1e9)
+    assert len(tid_problem.grid(tid_sweep.ARTICLE_B, tid_sweep.ARTICLE_K, tid_sweep.ARTICLE_C)) == 1840
+    assert tid_sweep.ARTICLE_K[:3] == (1e4, 2e4, 3e4) and tid_sweep.ARTICLE_K[-2:] == (9e8, 1e9)
 
 
 def test_process_pool_gives_identical_results(short, reference):
@@ -254,7 +255,7 @@ def test_journal_carries_its_configuration_and_nothing_else(short, journal_lines
     assert stamp.startswith("# vtb sweep journal ")
     body = json.loads(stamp[len("# vtb sweep journal "):])
     assert body["format"] == 1 and body["config"] == short.to_dict()
-    assert journal_lines[1].strip() == ",".join(sweep_mod.JOURNAL_COLUMNS)
+    assert journal_lines[1].strip() == ",".join(tid_problem.JOURNAL_COLUMNS)
     assert len(journal_lines) == 4
     out = tmp_path / "s.csv"
     vtb.sweep(short, **ONE, out=out, progress=False)
@@ -300,7 +301,7 @@ def test_failed_cases_are_retried_on_resume(short, reference, tmp_path, monkeypa
     assert ran == []
     # the journal keeps both rows; the successful one is the case's
     assert sum(line.startswith("5.0,100000000.0,") for line in out.read_text().splitlines()) == 2
-    _same_rows(reference, sweep_mod.read_journal(out))
+    _same_rows(reference, tid_problem.read_journal(out))
 
 
 def test_repeated_rows_the_last_successful_one_wins(short, journal_lines, tmp_path, monkeypatch):
@@ -351,13 +352,13 @@ def test_corrupt_journal_is_refused_with_its_line(short, journal_lines, tmp_path
     assert e.value.field == "out" and str(out) in str(e.value)
     assert ran == [] and out.read_bytes() == before
     with pytest.raises(vtb.ConfigError, match=f"line {number}:"):
-        sweep_mod.read_journal(out)
+        tid_problem.read_journal(out)
 
 
 def test_partial_last_line_is_still_dropped(short, journal_lines, tmp_path, monkeypatch):
     out = tmp_path / "s.csv"
     out.write_text("".join(journal_lines[:3]) + journal_lines[3][:40])
-    assert len(sweep_mod.read_journal(out)) == 1  # a reader ignores it without touching the file
+    assert len(tid_problem.read_journal(out)) == 1  # a reader ignores it without touching the file
     ran = _recording(monkeypatch)
     r = vtb.sweep(short, **ONE, out=out, progress=False)
     assert ran == [(5.0, 2e8, 1e3)] and r.columns["error"][1] == ""
@@ -367,7 +368,7 @@ def test_partial_last_line_is_still_dropped(short, journal_lines, tmp_path, monk
 _HOLDER = """
 import sys, time
 from pathlib import Path
-from vtb.journal import lock
+from vtb.studies.journal import lock
 with lock(Path(sys.argv[1])):
     print("locked", flush=True)
     time.sleep(120)

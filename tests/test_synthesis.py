@@ -12,7 +12,8 @@ import pytest
 import scipy.sparse.linalg as spla
 
 import vtb
-from vtb import synthesis, track
+from vtb.run import synthesis
+from vtb.analysis import eigen
 
 
 def one_span(cutoff=4000.0):
@@ -49,13 +50,13 @@ def fem_of(c):
 def test_static_compliance_of_the_reduction_is_the_full_models_at_10000_positions():
     c = one_span()
     red = synthesis.reduction(c)
-    system = track._assemble(synthesis._structure_config(c))
+    system = eigen.assemble(synthesis._structure_config(c))
     lu = spla.splu(system.k.tocsc())
     xs = np.random.default_rng(3).uniform(0.0, 32.0, 10_000)
     starts, values = vtb._core.shapes(system.json, 0, np.ascontiguousarray(xs))
     worst = 0.0
     for lo in range(0, xs.size, 2000):
-        s = track._shape_matrix(system, 0, xs[lo:lo + 2000]).toarray()
+        s = eigen.shape_matrix(system, 0, xs[lo:lo + 2000]).toarray()
         full = np.einsum("ij,ij->j", s, lu.solve(s))
         mine = np.array([red.core.static_flexibility(int(st), list(map(float, v))) for st, v in zip(starts[lo:lo + 2000], values[lo:lo + 2000])])
         worst = max(worst, float(np.max(np.abs(mine / full - 1.0))))
@@ -249,10 +250,8 @@ def test_the_cache_key_is_the_structures_alone(monkeypatch):
     d.irregularity = vtb.Irregularity(kind="none")
     assert synthesis.cache_key(c) == synthesis.cache_key(d)
     # Nor does a field added to the solver: the key holds no solver at all.
-    from vtb import track
-
-    key, real = synthesis.cache_key(c), track._structure_json
-    monkeypatch.setattr(track, "_structure_json", lambda cfg: json.dumps({**json.loads(real(cfg)), "solver": {"new_field": 1.0}}))
+    key, real = synthesis.cache_key(c), synthesis.structure_json
+    monkeypatch.setattr(synthesis, "structure_json", lambda cfg: json.dumps({**json.loads(real(cfg)), "solver": {"new_field": 1.0}}))
     assert synthesis.cache_key(c) == key
     monkeypatch.undo()
     e = c.copy()
@@ -264,7 +263,8 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     """A TID sweep on the fast converged model (one span), Ctrl-C after its first lockstep
     group: the finished cases are journaled, the resume runs only the others, and the result
     equals an uninterrupted sweep's bit for bit."""
-    from vtb import scaleout, tid_sweep
+    from vtb.run import scaleout
+    from vtb.article import tid_problem
 
     c = one_span()
     c.solver.t_end = 0.02
@@ -292,7 +292,7 @@ def test_an_interrupted_sweep_on_the_synthesis_resumes_bit_for_bit(tmp_path, mon
     ran.clear()
     resumed = vtb.sweep(c, **grid, out=out, progress=False, threads=1)
     assert sum(ran) == len(reference) - journaled
-    for k in tid_sweep.COLUMNS:
+    for k in tid_problem.COLUMNS:
         a, b = reference.columns[k], resumed.columns[k]
         assert (list(a) == list(b)) if k == "error" else np.array_equal(a, b, equal_nan=True), k
 

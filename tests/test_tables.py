@@ -94,7 +94,7 @@ def test_metrics_table_of_a_batch_with_a_failed_job(short, tmp_path):
     assert back.attrs["units"]["rail_disp_max"] == "m"
     vtb.to_parquet(res, tmp_path / "batch.parquet")  # the batch itself: its metrics table
     _same_frame(vtb.read_parquet(tmp_path / "batch.parquet"), df)
-    assert vtb.to_parquet is vtb.tables.to_parquet and "to_parquet" in vtb.__all__
+    assert vtb.to_parquet is vtb.run.tables.to_parquet and "to_parquet" in vtb.__all__
     with pytest.raises(vtb.ConfigError, match=r"results\[0\]"):
         vtb.metrics_table(["nope"])
 

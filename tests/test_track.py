@@ -305,11 +305,11 @@ def test_receptance_shapes_and_frequency_forms(beam):
 
 def test_decay_rate_defaults_on_a_fastened_rail():
     """On a rail on discrete fasteners, the default positions are multiples of the fastener
-    spacing (vtb.track.DEFAULT_DECAY_POSITIONS × a), truncated at the end of the structure:
+    spacing (vtb.analysis.track.DEFAULT_DECAY_POSITIONS × a), truncated at the end of the structure:
     the result equals the estimator with those positions given explicitly."""
     cfg = two_layer_track("fem")
     f = [300.0, 1000.0]
-    d = 0.6 * np.asarray(vtb.track.DEFAULT_DECAY_POSITIONS)
+    d = 0.6 * np.asarray(vtb.analysis.track.DEFAULT_DECAY_POSITIONS)
     d = d[d <= 6.0 + 1e-9]
     assert np.allclose(vtb.decay_rate(cfg, f), vtb.decay_rate(cfg, f, x0=6.0, positions=d, direction=1))
     assert np.all(vtb.decay_rate(cfg, f) > 0)

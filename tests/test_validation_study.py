@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from vtb import cli
-from vtb.validation import (
+from vtb.article.validation import (
     BAND_CENTRES,
     CONVERGED,
     DESIGN_CASES,

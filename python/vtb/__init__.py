@@ -10,9 +10,13 @@ Quick start::
 See ``README.md`` for units and conventions and ``docs/`` for the model and its choices.
 """
 
-from . import comfort, irregularity, spectra
-from ._core import __version__
-from .config import (
+import sys
+import types
+
+from .analysis import comfort, spectra
+from .config import irregularity
+from .config.gateway import __version__
+from .config.fields import (
     Config,
     Coupling,
     Discretisation,
@@ -26,25 +30,29 @@ from .config import (
     Structure,
     TIDs,
     Vehicle,
+    plausible_ranges,
 )
 from .errors import ConfigError, ConvergenceError, SolverError, StaleFileError, VtbError
-from .fesea import FeSeaReport, fesea_report
-from .irregularity import Irregularity, IrregularityWarning
-from .presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
-from .spectra import low_pass
-from .contact import contact_patch_half_length
-from .resolution import LayerBand, ResolutionWarning, ResolvedBand, resolved_band
-from .simulate import Result, assembled_matrices, irregularity_profile, load, metric_unit, simulate, simulate_batch
-from .studies import StudyResult, get_field, index_names, set_field, study
-from .tid_sweep import SweepResult, pinned_pinned_frequency, sweep
-from .track import Modes, decay_rate, deck_band, modes, receptance
-from .spans import spans
-from .trains import TrainInfo, consist_extent, train, trains
-from .zones import bridge_extent, track_zones
-from .optimize import OptimizationResult, ParetoResult, optimize
-from .robust import DesignEvaluation, evaluate_design, evaluate_designs
-from .tables import metrics_table, read_parquet, to_parquet
-from .config import plausible_ranges
+from .analysis.fesea import FeSeaReport, fesea_report
+from .config.irregularity import Irregularity, IrregularityWarning
+from .config.presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
+from .analysis.spectra import low_pass
+from .analysis.contact import contact_patch_half_length
+from .config.resolution import LayerBand, ResolutionWarning, ResolvedBand, resolved_band
+from .config.prepare import irregularity_profile
+from .run.indices import metric_unit
+from .run.simulate import Result, assembled_matrices, load, simulate, simulate_batch
+from .studies.grid import StudyResult, get_field, index_names, set_field, study
+from .article.tid_problem import OptimizationResult, SweepResult
+from .article.tid_sweep import pinned_pinned_frequency, sweep
+from .analysis.track import Modes, decay_rate, deck_band, modes, receptance
+from .config.spans import spans
+from .config.trains import TrainInfo, consist_extent, train, trains
+from .config.zones import bridge_extent, track_zones
+from .article.tid_optimize import optimize
+from .studies.optimize import ParetoResult
+from .article.robust import DesignEvaluation, evaluate_design, evaluate_designs
+from .run.tables import metrics_table, read_parquet, to_parquet
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
@@ -56,3 +64,17 @@ __all__ = [
     "metrics_table", "read_parquet", "to_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
     "train", "trains", "TrainInfo", "consist_extent", "track_zones", "bridge_extent",
 ]
+
+
+class _Face(types.ModuleType):
+    """``vtb`` itself. Importing an old module path whose name is also a function here
+    (``import vtb.simulate``, ``vtb.optimize``, ``vtb.spans``, ``vtb.trains``) would set the
+    module over the function; the function stays. Goes with the old paths."""
+
+    def __setattr__(self, name, value):
+        if isinstance(value, types.ModuleType) and isinstance(self.__dict__.get(name), types.FunctionType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Face

@@ -12,7 +12,17 @@ import tempfile
 import time
 from pathlib import Path
 
-from .errors import VtbError, config_error
+from .article import reproduce, robust_study, validation
+from .article.tid_optimize import optimize
+from .article.tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
+from .config.fields import Config
+from .config.gateway import __version__
+from .config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config, example_text, examples, paper_config, tids_around
+from .config.resolution import resolved_band
+from .errors import StaleFileError, VtbError, config_error
+from .run.indices import A_RM, A_SM, metric_unit, rate
+from .run.simulate import simulate
+from .studies.grid import study
 
 #: What each command writes into its ``--out`` directory (refused when present, unless
 #: ``--force``).
@@ -59,8 +69,6 @@ def run_setting_aside_stale(run, force: bool):
     stderr) and ``run()`` called again. The journals and checkpoints that match are still
     reused, so nothing valid is repeated; a journal in use by another process is a plain
     :class:`~vtb.errors.ConfigError` and never set aside."""
-    from .errors import StaleFileError
-
     set_aside = set()
     while True:
         try:
@@ -78,8 +86,6 @@ def check_config_file(path) -> None:
     """``--config`` names a readable file or a shipped example."""
     if path is None:
         return
-    from .presets import examples
-
     p = Path(path)
     if p.is_dir():
         raise config_error("--config", path, "is a directory, not a TOML file")
@@ -98,12 +104,8 @@ def require_matplotlib(command: str) -> None:
 
 def _load_config(path: str | None):
     """The article's case, a TOML file, or a shipped example by name (``vtb examples``)."""
-    from .presets import example_config, examples, paper_config
-
     if path is None:
         return paper_config()
-    from .config import Config
-
     check_config_file(path)
     if not Path(path).is_file() and path in examples():
         return example_config(path)
@@ -111,8 +113,6 @@ def _load_config(path: str | None):
 
 
 def _print_metrics(metrics: dict, out=None) -> None:
-    from .simulate import metric_unit
-
     out = out or sys.stdout
     width = max(len(k) for k in metrics)
     for k, v in metrics.items():
@@ -139,10 +139,6 @@ def _rounded(cfg) -> str:
 def _describe(cfg, label: str) -> list[str]:
     """What a run is: its model and what it resolves, its excitation, and how its numbers
     relate to the article's published ones (``#`` lines printed before the metrics)."""
-    from .presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config
-    from .reproduce import ARTICLE_33
-    from .resolution import resolved_band
-
     d = cfg.discretisation
     rail = cfg.structure.layers[0]
     if d.method == "fem":
@@ -169,11 +165,11 @@ def _describe(cfg, label: str) -> list[str]:
                 continue
             if not calibrated:
                 lines.append(f"# this is the raw spectrum level (×1). The article does not state its level; its published "
-                             f"rail_acc_max {ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}: "
+                             f"{A_RM} {ARTICLE_RAIL_ACC} m/s² needs vtb's calibrated level ×{PAPER_CALIBRATED_SCALE}: "
                              f"vtb simulate --config article{'_converged' if model_name == 'converged' else ''}. No number below is the article's.")
             else:
-                published = ", ".join(f"{k} {v[0]:g}" for k, v in ARTICLE_33.items())
-                lines.append(f"# the level ×{PAPER_CALIBRATED_SCALE} is fitted so that the article model's rail_acc_max is the article's "
+                published = ", ".join(f"{k} {v[0]:g}" for k, v in reproduce.ARTICLE_33.items())
+                lines.append(f"# the level ×{PAPER_CALIBRATED_SCALE} is fitted so that the article model's {A_RM} is the article's "
                              f"{ARTICLE_RAIL_ACC} m/s² (the one fitted number); the article publishes {published} (SI units), "
                              "out-of-sample comparisons" + (" for its hybrid model: this converged model differs by design (docs/validation.md)" if model_name == "converged" else ""))
     return lines
@@ -183,8 +179,6 @@ def cmd_simulate(args) -> int:
     if args.out:
         check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
     cfg = _load_config(args.config)
-    from .simulate import simulate
-
     t0 = time.perf_counter()
     res = simulate(cfg)
     elapsed = time.perf_counter() - t0
@@ -200,7 +194,7 @@ def cmd_simulate(args) -> int:
         cfg.to_toml(out / "config.toml")
         if not args.no_plot:
             try:
-                from .plotting import plot_histories
+                from .analysis.plotting import plot_histories
             except ImportError:
                 print("matplotlib is not installed: no plot (pip install 'vtb[plot]')", file=sys.stderr)
             else:
@@ -212,7 +206,7 @@ def cmd_simulate(args) -> int:
 @contextlib.contextmanager
 def study_executor(args):
     """The executor a study command's runs go to: a Dask cluster's (``--scheduler ADDRESS``),
-    else None (this process; :mod:`vtb.scaleout`)."""
+    else None (this process; :mod:`vtb.run.scaleout`)."""
     address = getattr(args, "scheduler", None)
     if not address:
         yield None
@@ -232,17 +226,15 @@ def study_executor(args):
 def cmd_validate(args) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
-    from .validation import REFERENCE, errors, run_study, write_report
-
     check_out_file(args.out, "--out", args.force)
     with contextlib.ExitStack() as stack:
         pool = stack.enter_context(study_executor(args)) if args.scheduler else stack.enter_context(ProcessPoolExecutor(max_workers=args.workers))
-        cases = run_study(progress=not args.no_progress, executor=pool)
+        cases = validation.run_study(progress=not args.no_progress, executor=pool)
     command = shlex.join(["vtb", *args.argv])
-    write_report(cases, args.out, command=command)
-    ref = next(c for c in cases if c.label == REFERENCE)
+    validation.write_report(cases, args.out, command=command)
+    ref = next(c for c in cases if c.label == validation.REFERENCE)
     for c in cases:
-        e = errors(c.values[("raw", None)], ref.values[("raw", None)])
+        e = validation.errors(c.values[("raw", None)], ref.values[("raw", None)])
         print(f"{c.label:<52} {c.seconds[('raw', None)]:6.1f} s  rail acc ≤2 kHz {e['rail_acc_lp']:+6.1f} %  "
               f"bands {e['bands_max']:+6.1f} %  rail disp {e['rail_disp']:+5.1f} %  slab acc {e['slab_acc_lp']:+5.1f} %")
     print(f"# wrote {args.out}")
@@ -254,8 +246,6 @@ def _floats(text: str) -> list:
 
 
 def _tid_config(args):
-    from .presets import paper_config, tids_around
-
     cfg = _load_config(args.config) if args.config else paper_config(calibrated=args.calibrated)
     if cfg.tids is None:
         cfg.tids = tids_around(cfg)
@@ -263,8 +253,6 @@ def _tid_config(args):
 
 
 def cmd_sweep(args) -> int:
-    from .tid_sweep import ARTICLE_B, ARTICLE_C, ARTICLE_K, sweep, sweep_report
-
     check_config_file(args.config)
     if Path(args.out).is_dir():
         raise config_error("--out", args.out, "is a directory, not a journal file")
@@ -291,8 +279,6 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_optimize(args) -> int:
-    from .optimize import optimize
-
     check_config_file(args.config)
     if args.out:
         check_out_file(args.out, "--out", args.force)
@@ -309,10 +295,10 @@ def cmd_optimize(args) -> int:
     h = res.moga.history[-1]
     print(f"# {res.moga.n_gen} generations, {res.moga.n_evals} evaluations ({res.moga.message}); hypervolume {h.hypervolume:.6g} (m/s²)² against (a_rm0, a_sm0)")
     rows = res.table()
-    print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline['rail_acc_max']:.2f}, a_sm0 = {res.baseline['slab_acc_max']:.3f} m/s²")
+    print(f"# {len(res)} feasible non-dominated solutions; uncontrolled a_rm0 = {res.baseline[A_RM]:.2f}, a_sm0 = {res.baseline[A_SM]:.3f} m/s²")
     for r in rows:
         print(f"{r['choice']:<18} b_t {r['b_t']:.3f} kg  k_t {r['k_t']:.4g} N/m  c_t {r['c_t']:.4g} N·s/m  "
-              f"a_rm {r['rail_acc_max']:.2f} ({100 * r['eta_rail_acc_max']:+.2f} %)  a_sm {r['slab_acc_max']:.3f} ({100 * r['eta_slab_acc_max']:+.2f} %)  η_r {100 * r['eta_r']:+.2f} %")
+              f"a_rm {r[A_RM]:.2f} ({100 * r[rate(A_RM)]:+.2f} %)  a_sm {r[A_SM]:.3f} ({100 * r[rate(A_SM)]:+.2f} %)  η_r {100 * r['eta_r']:+.2f} %")
     if args.out:
         import csv
 
@@ -326,8 +312,6 @@ def cmd_optimize(args) -> int:
 
 
 def cmd_examples(args) -> int:
-    from .presets import example_text, examples
-
     if args.name:
         sys.stdout.write(example_text(args.name))
         return 0
@@ -342,33 +326,27 @@ def cmd_examples(args) -> int:
 
 
 def cmd_reproduce(args) -> int:
-    from .reproduce import run
-
     require_matplotlib("vtb reproduce")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its sweep journal and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
     with study_executor(args) as executor:
-        report = run_setting_aside_stale(lambda: run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop,
+        report = run_setting_aside_stale(lambda: reproduce.run(args.out, quick=args.quick, progress=not args.no_progress, seed=args.seed, pop_size=args.pop,
                                                      n_gen=args.gen, optimiser=args.optimiser, executor=executor), args.force)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
 def cmd_study(args) -> int:
-    from .robust_study import run
-
     require_matplotlib("vtb study")
     check_out_dir(args.out, "--out", REPRODUCE_FILES, args.force, hint=" (its journals and optimiser checkpoints are reused when they match)")
     t0 = time.perf_counter()
     with study_executor(args) as executor:
-        report = run_setting_aside_stale(lambda: run(args.out, quick=args.quick, progress=not args.no_progress, executor=executor), args.force)
+        report = run_setting_aside_stale(lambda: robust_study.run(args.out, quick=args.quick, progress=not args.no_progress, executor=executor), args.force)
     print(f"# wrote {report} in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
 def cmd_study_grid(args) -> int:
-    from .studies import study
-
     cfg = _load_config(args.config)
     grid = {}
     for item in args.vary:
@@ -401,8 +379,6 @@ def scheduler(sp) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
-
     p = argparse.ArgumentParser(prog="vtb", description="Vehicle–track–bridge vertical dynamics.")
     p.add_argument("--version", action="version", version=f"vtb {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -453,16 +429,14 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("name", nargs="?", help="example to print (e.g. article)")
     e.set_defaults(func=cmd_examples)
 
-    from .reproduce import DEFAULT_OPTIMISER
-
     r = sub.add_parser("reproduce", help="the article's whole chain: §3.3 histories, sweep, optimisation; figures, tables, report")
     r.add_argument("--out", required=True, help="output directory")
     r.add_argument("--quick", action="store_true", help="reduced chain (about a minute)")
     r.add_argument("--seed", type=int, default=0, help="optimiser seed")
     r.add_argument("--pop", type=int, help="optimiser population (default: 100; --quick 8)")
     r.add_argument("--gen", type=int, help="optimiser generations (default: 100; --quick 3)")
-    r.add_argument("--optimiser", choices=("warm", "cold", "both"), default=DEFAULT_OPTIMISER,
-                   help=f"warm: first population from the sweep; cold: a random one; both: the two, compared; each stops on the hypervolume (default {DEFAULT_OPTIMISER}, chosen over seeds in docs/optimiser-choice)")
+    r.add_argument("--optimiser", choices=("warm", "cold", "both"), default=reproduce.DEFAULT_OPTIMISER,
+                   help=f"warm: first population from the sweep; cold: a random one; both: the two, compared; each stops on the hypervolume (default {reproduce.DEFAULT_OPTIMISER}, chosen over seeds in docs/optimiser-choice)")
     r.add_argument("--no-progress", action="store_true", help="no progress bars")
     r.add_argument("--force", action="store_true", help="write into an --out that holds an earlier report (its sweep journal and optimiser checkpoints are reused when they match; those of another configuration are renamed *.stale and their stage runs afresh)")
     scheduler(r)

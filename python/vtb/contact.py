@@ -1,17 +1,7 @@
-"""The wheel–rail contact (docs/model.md §4): the Hertz contact patch of the distributed contact
-(``Vehicle.contact_patch``)."""
+"""Deprecated path: the module is :mod:`vtb.analysis.contact`; this alias goes in the next release."""
 
-from __future__ import annotations
+import sys
 
-from . import _core
-from .schema import default
+from ._moved import moved
 
-
-def contact_patch_half_length(load: float, wheel_radius: float, rail_crown_radius: float = default("VehicleConfig", "rail_crown_radius")) -> float:
-    """Half-length (m) along the rail of the Hertz contact ellipse of a steel wheel of rolling
-    radius ``wheel_radius`` (m) on a steel rail head of crown radius ``rail_crown_radius`` (m)
-    under ``load`` (N): the patch a wheel spreads its force over with
-    ``Vehicle.contact_patch`` (there, of its static load). 6.42 mm for 72 kN on a 0.46 m
-    wheel and a 0.3 m crown. Raises :class:`vtb.ConfigError` naming a non-positive or
-    non-finite argument."""
-    return _core.patch_half_length(float(load), float(wheel_radius), float(rail_crown_radius))
+sys.modules[__name__] = moved(__name__, "vtb.analysis.contact")

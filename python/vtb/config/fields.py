@@ -1,6 +1,6 @@
 """Run configuration as plain dataclasses.
 
-The Rust core owns the configuration: its schema (:mod:`vtb.schema`) defines every field,
+The Rust core owns the configuration: its schema (:mod:`vtb.config.schema`) defines every field,
 type and default, the defaults here are read from it, ``tests/test_schema.py`` holds these
 classes to it, and the core alone validates the values (naming the field on error).
 :meth:`Config.to_core_json` serialises everything except the irregularity, which is
@@ -26,9 +26,9 @@ from typing import Any, Literal, Optional, Union
 
 import numpy as np
 
-from .errors import config_error
-from .irregularity import Irregularity
-from . import _core
+from ..errors import config_error
+from .irregularity import SPECTRA, Irregularity
+from . import gateway
 from .schema import StrictFields
 from .schema import default as _default
 from .schema import documented
@@ -124,7 +124,7 @@ class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
     FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements).
     ``synthesis_cutoff`` (Hz): run a finite-element structure by complex-modal synthesis
-    (:mod:`vtb.synthesis`) instead of stepping its elements."""
+    (:mod:`vtb.run.synthesis`) instead of stepping its elements."""
 
     method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
     fem_elements: int = _default("DiscretisationConfig", "fem_elements")
@@ -176,12 +176,12 @@ class Vehicle(StrictFields):
     @property
     def dofs(self) -> tuple:
         """Names of the model's DOFs, in the order of ``Result.vehicle_disp``."""
-        return tuple(_core.vehicle_models()[self.model][0])
+        return tuple(gateway.vehicle_models()[self.model][0])
 
     @property
     def n_wheels(self) -> int:
         """Wheels of the model (the columns of ``Result.contact_force`` per vehicle)."""
-        return _core.vehicle_models()[self.model][1]
+        return gateway.vehicle_models()[self.model][1]
 
     @property
     def length(self) -> float:
@@ -317,15 +317,13 @@ class Config(StrictFields):
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict:
         """Plain nested dict (TOML/JSON friendly; damping carries a ``kind`` tag)."""
-        return _to_plain(self)
+        return to_plain(self)
 
     def excitation_omega_r(self) -> Optional[float]:
         """The default ω_r (rad/s) from the irregularity: 2π·v/sqrt(λ_min·λ_max) for a
         spectrum (the centre of its band v/λ on a log scale), 2π·v/λ for a corrugation
         (``wavelength``) or a dip (``length``); ``None`` when there is no wavelength."""
         irr = self.irregularity
-        from .irregularity import SPECTRA
-
         try:
             if irr.kind in SPECTRA:
                 lam = math.sqrt(irr.wavelength_min * irr.wavelength_max)
@@ -363,21 +361,19 @@ class Config(StrictFields):
         or missing fields raise :class:`~vtb.errors.ConfigError`. Values are validated by
         the core when the configuration runs, or now by :meth:`validate`; their types and
         ranges are checked here, by the core's schema."""
-        from . import _core
-
         cfg = _from_plain(cls, data, "")
-        _core.check_schema(cfg.to_core_json())
+        gateway.check_schema(cfg.to_core_json())
         return cfg
 
     def validate(self) -> None:
         """Checks the whole configuration now (the core's validation, against the generated
         irregularity) and raises :class:`~vtb.errors.ConfigError` naming the first bad field;
-        :func:`vtb.simulate` does the same check when it runs."""
-        from . import _core
-        from .simulate import _prepare, _profile_args
+        :func:`vtb.run.simulate` does the same check when it runs."""
+        # The one import circle of vtb: a configuration's own check is that of a prepared run,
+        # and the preparation (vtb.config.prepare) takes a Config.
+        from .prepare import validate
 
-        text, profile = _prepare(self)
-        _core.validate(text, *_profile_args(profile))
+        validate(self)
 
     def to_toml(self, path: Union[str, Path, None] = None) -> str:
         import tomli_w
@@ -461,16 +457,16 @@ def _field_names(cls) -> tuple:
     return tuple(f.name for f in dataclasses.fields(cls))
 
 
-def _to_plain(obj):
+def to_plain(obj):
     if obj is None or type(obj) in (float, int, str, bool):  # exact types: numpy scalars convert below
         return obj
     if isinstance(obj, (RayleighRatio, RayleighCoefficients)):
         kind = "ratio" if isinstance(obj, RayleighRatio) else "coefficients"
-        return {"kind": kind, **{n: _to_plain(getattr(obj, n)) for n in _field_names(type(obj))}}
+        return {"kind": kind, **{n: to_plain(getattr(obj, n)) for n in _field_names(type(obj))}}
     if dataclasses.is_dataclass(obj):
-        return {n: _to_plain(getattr(obj, n)) for n in _field_names(type(obj))}
+        return {n: to_plain(getattr(obj, n)) for n in _field_names(type(obj))}
     if isinstance(obj, (list, tuple)):
-        return [_to_plain(v) for v in obj]
+        return [to_plain(v) for v in obj]
     if hasattr(obj, "tolist"):  # numpy arrays and scalars
         return obj.tolist()
     return obj
@@ -591,6 +587,22 @@ def _check_value(v, hint, path: str) -> None:
         check_types(v, path)
 
 
+def structure_json(config: Config, text: Optional[str] = None) -> str:
+    """The core JSON of ``config`` (``text`` when the caller has made it) with its loads, speed,
+    solver and outputs replaced by a neutral single zero force, so that only the structure is
+    validated and assembled (what the frequency-domain tools, the resolved band and the
+    synthesis' reduction are computed from)."""
+    if not isinstance(config, Config):
+        raise config_error("config", type(config).__name__, "expected a vtb.Config")
+    d = json.loads(config.to_core_json() if text is None else text)  # resolves a hybrid's default ω_r from the irregularity
+    d["vehicles"] = []
+    d["forces"] = [{"magnitude": 0.0, "x0": 0.0, "layer": None}]
+    d["speed"] = 0.0
+    d["solver"] = to_plain(Solver(dt=1e-3, t_end=1e-3, initial_state="rest"))
+    d["output"] = {"points": []}
+    return json.dumps(d, allow_nan=False)
+
+
 def core_dict(cfg: Config) -> dict[str, Any]:
     """The dict the core receives (for inspection)."""
     return json.loads(cfg.to_core_json())
@@ -601,6 +613,4 @@ def plausible_ranges() -> list:
     "max", "unit", "covers"}`` (SI units; ``[*]`` stands for every index of a list). A value
     outside its range raises :class:`vtb.ConfigError` naming the field, the value and the likely
     unit mistake, unless ``Config.accept_implausible`` lists the field's path."""
-    from . import _core
-
-    return [dict(field=f, min=lo, max=hi, unit=u, covers=c) for f, lo, hi, u, c in _core.plausible_ranges()]
+    return [dict(field=f, min=lo, max=hi, unit=u, covers=c) for f, lo, hi, u, c in gateway.plausible_ranges()]

@@ -5,8 +5,8 @@ their dotted paths (``"speed"``, ``"tids.stiffness"``, ``"structure.couplings[0]
 ``"irregularity.seed"``; the aliases of :data:`ALIASES` name the dampers' b_t, k_t, c_t) and
 reports the indices named (``output.indices``: every index the core computes for the
 configuration, :func:`index_names`). Its runs are lockstep batches in Rust or tasks on any
-:class:`concurrent.futures.Executor`, Dask's included (:mod:`vtb.scaleout`); with ``out=``
-every finished case is journaled as soon as its group finishes (:mod:`vtb.journal`), and a
+:class:`concurrent.futures.Executor`, Dask's included (:mod:`vtb.run.scaleout`); with ``out=``
+every finished case is journaled as soon as its group finishes (:mod:`vtb.studies.journal`), and a
 re-run with the same path runs only the cases the journal lacks.
 
 The article's TID sweep (:func:`vtb.sweep`) is this study over ``b_t, k_t, c_t`` with the
@@ -28,10 +28,12 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import journal as jr
-from .config import Config
-from .errors import VtbError, config_error
-from .scaleout import run_cases
-from .tables import units_of
+from ..config.fields import Config
+from ..config.presets import tids_around
+from ..errors import VtbError, config_error
+from ..run.indices import index_names
+from ..run.scaleout import run_cases
+from ..run.tables import frame, to_parquet, units_of
 
 #: Short names of fields: the dampers' inertance, stiffness and damping as the article names them.
 ALIASES = {
@@ -80,8 +82,6 @@ def set_field(config: Config, path: str, value) -> None:
     a damper field of a configuration without dampers first gets :func:`vtb.tids_around`'s."""
     parts = _parts(path)
     if parts[0] == "tids" and len(parts) > 1 and config.tids is None:
-        from .presets import tids_around
-
         config.tids = tids_around(config)
     obj = config
     for part in parts[:-1]:
@@ -93,15 +93,6 @@ def set_field(config: Config, path: str, value) -> None:
         obj[parts[-1]] = value
     else:
         setattr(obj, parts[-1], value)
-
-
-def index_names(config: Config) -> list:
-    """Every index a run of ``config`` reports (the core's list; ``output.indices`` names a
-    subset): per layer ``{layer}_disp_max``, ``_acc_max``, ``_acc_rms``, ``_acc_settle`` (and
-    ``_acc_max_raw`` with a band limit), the first car's and the contacts' indices."""
-    from . import _core
-
-    return list(_core.index_names(config.to_core_json()))
 
 
 def _values(path: str, values) -> list:
@@ -158,8 +149,6 @@ class StudyResult:
 
     def to_pandas(self):
         """The columns as a DataFrame, index units in ``attrs["units"]`` (needs pandas)."""
-        from .tables import frame
-
         return frame(self.columns, units_of(self.columns))
 
     def to_csv(self, path) -> None:
@@ -169,8 +158,6 @@ class StudyResult:
 
     def to_parquet(self, path) -> None:
         """Parquet export of :meth:`to_pandas`, units in its metadata (needs pyarrow)."""
-        from .tables import to_parquet
-
         to_parquet(self.to_pandas(), path)
 
 
@@ -249,7 +236,7 @@ def plan(config: Config, grid: Optional[Mapping] = None, *, cases: Optional[Sequ
                 raise config_error(f"cases[{i}]", sorted(c), f"every case sets the same fields ({', '.join(variables)})")
         points = [tuple(_values(p, [c[p]])[0] for p in variables) for c in cases]
     for p in variables:
-        get_field(_with_tids(config, p), p)  # the path exists
+        get_field(with_tids(config, p), p)  # the path exists
     names = index_names(config)
     if indices is None:
         indices = tuple(names)
@@ -268,13 +255,10 @@ def plan(config: Config, grid: Optional[Mapping] = None, *, cases: Optional[Sequ
     return layout, rows, configs
 
 
-def _with_tids(config: Config, path: str) -> Config:
+def with_tids(config: Config, path: str) -> Config:
     """``config``, given :func:`vtb.tids_around`'s dampers if ``path`` is a damper field and it has none."""
     if _parts(path)[0] == "tids" and config.tids is None:
-        from .presets import tids_around
-
         cfg = config.copy()
-
         cfg.tids = tids_around(cfg)
         return cfg
     return config
@@ -307,11 +291,11 @@ def study(
     before any run.
 
     Runs: one Rust batch on ``threads`` cores (lockstep groups, each group's cases reported as
-    it finishes), or tasks of ``chunk`` cases on ``executor`` (:mod:`vtb.scaleout`). A failing
+    it finishes), or tasks of ``chunk`` cases on ``executor`` (:mod:`vtb.run.scaleout`). A failing
     case is recorded with its reason and the study goes on. ``progress``: a tqdm bar (True),
     none (False) or ``f(done, total)``.
 
-    ``out``: a CSV journal (:mod:`vtb.journal`; ``.parquet``: the journal is ``out + ".csv"``
+    ``out``: a CSV journal (:mod:`vtb.studies.journal`; ``.parquet``: the journal is ``out + ".csv"``
     and the Parquet table is written at the end). Each finished case is appended as soon as its
     group finishes; a re-run with the same path runs only the cases the journal lacks (keyed by
     their values, so an extended grid runs only the new ones; failed cases are retried). The

@@ -1,0 +1,181 @@
+"""The assembled structure of a configuration and its eigensolutions: the one place the
+analyses and the synthesis reach the core's matrices, shape vectors, SPD solver and reduction.
+
+:func:`assemble` gives the sparse M, K, C of a configuration's structure alone (its loads,
+speed, solver and outputs neutral: :func:`vtb.config.fields.structure_json`), in the DOF
+numbering of :mod:`vtb.analysis.track`; :func:`shape_matrix` reads the core's shape vectors at
+points of a layer; :func:`sliced_eigsh` finds every eigenpair in a band by spectrum slicing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .. import _core
+from ..config.fields import Config, structure_json
+from ..errors import config_error
+
+
+@dataclass
+class System:
+    """The assembled structure of one configuration (sparse CSC matrices)."""
+
+    json: str
+    n: int
+    m: sp.csc_matrix
+    k: sp.csc_matrix
+    c: sp.csc_matrix
+    layers: list  # [(name, offset, n_dofs)]
+    length: float
+
+
+def assemble(config: Config) -> System:
+    js = structure_json(config)
+    out = _core.matrices(js)
+    n = int(out["n"])
+    mats = {}
+    for name in ("m", "k", "c"):
+        r, c, v = out[name]
+        # COO → CSC sums duplicate entries (both halves of the symmetric matrices are stored).
+        mats[name] = sp.coo_matrix((np.asarray(v, float), (np.asarray(r), np.asarray(c))), shape=(n, n)).tocsc()
+    return System(js, n, mats["m"], mats["k"], mats["c"], [tuple(l) for l in out["layer_offsets"]], float(config.structure.length))
+
+
+def layer_index(system: System, layer, field_name: str = "layer") -> int:
+    names = [l[0] for l in system.layers]
+    if isinstance(layer, (bool, np.bool_)):
+        raise config_error(field_name, layer, f"expected a layer name or index (layers: {names})")
+    if isinstance(layer, (int, np.integer)):
+        if 0 <= int(layer) < len(names):
+            return int(layer)
+        raise config_error(field_name, layer, f"no layer with that index (0 … {len(names) - 1}; layers: {names})")
+    if isinstance(layer, str):
+        if layer in names:
+            return names.index(layer)
+        raise config_error(field_name, layer, f"no layer of that name (layers: {names})")
+    raise config_error(field_name, layer, f"expected a layer name or index (layers: {names})")
+
+
+def _float_array(value, field_name: str) -> np.ndarray:
+    if isinstance(value, (str, bytes)) or value is None:
+        raise config_error(field_name, value, "must be a number or a 1-D array of numbers")
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise config_error(field_name, value, "must be a number or a 1-D array of numbers") from None
+    if a.ndim > 1:
+        raise config_error(field_name, value, f"must be a number or a 1-D array (got shape {a.shape})")
+    return a
+
+
+def checked_positions(value, length: float, field_name: str) -> tuple[np.ndarray, bool]:
+    """(1-D float array, was_scalar), every entry finite and within [0, L]."""
+    a = _float_array(value, field_name)
+    scalar = a.ndim == 0
+    a = np.atleast_1d(a)
+    if a.size == 0:
+        raise config_error(field_name, value, "needs at least one position")
+    for i, x in enumerate(a):
+        sub = field_name if scalar else f"{field_name}[{i}]"
+        if not math.isfinite(x):
+            raise config_error(sub, float(x), "must be a finite position (m)")
+        if not 0.0 <= x <= length:
+            raise config_error(sub, float(x), f"must lie on the structure, 0 ≤ x ≤ L = {length} m")
+    return a, scalar
+
+
+def checked_frequencies(value, field_name: str = "frequencies") -> np.ndarray:
+    """A 1-D float array of frequencies (Hz), each finite and ≥ 0; at least one."""
+    a = np.atleast_1d(_float_array(value, field_name))
+    if a.size == 0:
+        raise config_error(field_name, value, "needs at least one frequency (Hz)")
+    for i, f in enumerate(a):
+        if not math.isfinite(f) or f < 0.0:
+            raise config_error(f"{field_name}[{i}]", float(f), "frequencies must be finite and ≥ 0 (Hz)")
+    return a
+
+
+def shape_matrix(system: System, layer: int, xs: np.ndarray) -> sp.csc_matrix:
+    """The n × len(xs) sparse matrix whose column i is layer ``layer``'s shape vector at xs[i]."""
+    starts, values = _core.shapes(system.json, layer, np.ascontiguousarray(xs, dtype=float))
+    starts = np.asarray(starts, dtype=np.int64)
+    values = np.asarray(values, dtype=float)
+    p, width = values.shape
+    rows = (starts[:, None] + np.arange(width)[None, :]).ravel()
+    cols = np.repeat(np.arange(p), width)
+    return sp.csc_matrix((values.ravel(), (rows, cols)), shape=(system.n, p))
+#: Eigenpairs requested per shift-invert slice of :func:`modes`.
+EIGEN_BLOCK = 40
+
+
+class EigshFailed(Exception):
+    pass
+
+
+def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
+    """Every eigenpair of K φ = λ M φ with start ≤ λ ≤ hi, by spectrum slicing.
+
+    Each slice factorises K − σM at a shift σ = b, the lower edge of the part not yet covered,
+    and asks ARPACK for the ``EIGEN_BLOCK`` eigenvalues nearest σ; their radius r = max|λ − σ|
+    guarantees that every eigenvalue in [σ − r, σ + r] is among them. The eigenvalues at or above
+    b are accepted up to a boundary placed in the middle of the widest gap between consecutive
+    found eigenvalues in the upper half of the slice — a true gap, since the slice is complete
+    there — so no eigenvalue is counted twice or missed at a boundary, and the next shift never
+    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search. Raises
+    :class:`EigshFailed` when ARPACK fails or a slice would need n − 1 eigenpairs.
+    """
+    n = k.shape[0]
+    block = min(EIGEN_BLOCK, n - 2)
+    if block < 1:
+        raise EigshFailed
+    lams, phis = [], []
+    b = start
+    while True:
+        try:
+            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM")
+        except (spla.ArpackError, spla.ArpackNoConvergence, RuntimeError, ValueError):
+            raise EigshFailed from None
+        top = b + float(np.max(np.abs(lam - b)))
+        order = np.argsort(lam)
+        lam, phi = lam[order], phi[:, order]
+        up = lam >= b
+        u = lam[up]
+        if top > hi:
+            sel = up & (lam <= hi)
+            lams.append(lam[sel])
+            phis.append(phi[:, sel])
+            break
+        if u.size < 2:
+            if block >= n - 2:
+                raise EigshFailed
+            block = min(2 * block, n - 2)
+            continue
+        j0 = max(0, u.size // 2 - 1)
+        gaps = np.diff(u[j0:])
+        j = j0 + int(np.argmax(gaps))
+        boundary = 0.5 * (u[j] + u[j + 1])
+        sel = up & (lam < boundary)
+        lams.append(lam[sel])
+        phis.append(phi[:, sel])
+        b = boundary
+    return np.concatenate(lams), np.concatenate(phis, axis=1)
+
+
+def spd_solver(k: sp.spmatrix):
+    """The core's sparse LDLᵀ of a symmetric positive definite K: ``.solve(b)`` for a vector or
+    the columns of a matrix (8 per pass)."""
+    kc = k.tocoo()
+    return _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
+
+
+def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_dofs: int, band: int, residual: np.ndarray):
+    """The core's copy of a modal reduction (:class:`vtb.run.synthesis.Reduction`), ψ read in
+    place: no copy on this side."""
+    flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
+    return _core.Reduction(flat(lam.real), flat(lam.imag), flat(weight), np.ascontiguousarray(psi, dtype=complex),
+                           int(rail_dofs), int(band), flat(residual))

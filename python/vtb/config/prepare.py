@@ -1,0 +1,156 @@
+"""A configuration made ready for the core: the one way a run reaches it.
+
+:func:`prepare` makes the core JSON of a configuration once and, from it, checks the plausible
+ranges, the irregularity (which lives on this side), warns of indices and band levels beyond
+the band the run resolves, and samples the irregularity profile the wheels roll on
+(:func:`irregularity_profile`, shared by the runs on one sample). The core validates the rest
+once, when it runs the configuration; :meth:`vtb.Config.validate` asks it now.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import threading
+import warnings
+from collections import OrderedDict
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+from . import gateway
+from .fields import Config, check_types, to_plain
+from .irregularity import Irregularity
+from .resolution import real_or_none, resolved_band, warn_beyond
+from ..errors import VtbError, config_error
+
+#: Extra length of generated irregularity beyond the structure at each end (m).
+PROFILE_MARGIN = 0.0
+
+
+class SampledProfile(NamedTuple):
+    """What the wheels of a run roll on, on the grid x0 + i·dx (m): the rail's irregularity
+    ``values`` (m, positive = dip) and, with a wheel flat, one ``treads`` row per wheel (m, an
+    empty array for a round wheel; vehicles in order, wheelsets front to rear)."""
+
+    x0: float
+    dx: float
+    values: np.ndarray
+    treads: list
+
+    def core_args(self) -> tuple:
+        """The profile as the core takes it: (x0, dx, values or None, treads)."""
+        return self.x0, self.dx, self.values if self.values.size else None, self.treads
+
+
+def prepare(cfg: Config) -> tuple[str, SampledProfile]:
+    """The core JSON of a configuration and its irregularity profile, the plausible ranges and
+    the irregularity checked and the resolution warnings given (module docstring)."""
+    if not isinstance(cfg, Config):
+        raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
+    text = cfg.to_core_json()
+    # A unit mistake (a speed in km/h) is named before the irregularity's checks it would trip.
+    gateway.check_plausible(text)
+    if not isinstance(cfg.irregularity, Irregularity):
+        raise config_error("irregularity", cfg.irregularity, "expected a vtb.Irregularity")
+    check_types(cfg.irregularity, "irregularity")
+    vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
+    cfg.irregularity.validate(speed=real_or_none(cfg.speed), dt=real_or_none(getattr(cfg.solver, "dt", None)),
+                              wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
+    _warn_band_limit(cfg, text)
+    if any(q.kind == "wheel_flat" for q in (cfg.irregularity, *cfg.irregularity.parts)):
+        gateway.validate(text)  # a flat is sampled on its vehicle's wheel: a bad wheel is named first
+    return text, irregularity_profile(cfg, text)
+
+
+def _warn_band_limit(cfg: Config, text: str) -> None:
+    """A band-limited index beyond the band the run resolves for its top layer, or a band level
+    (``output.band_levels``) beyond the band of its layer, warns (:class:`vtb.ResolutionWarning`);
+    a configuration the core refuses is left to the run, which names the field."""
+    fc = real_or_none(getattr(cfg.output, "band_limit", None))
+    layers = getattr(cfg.structure, "layers", None)
+    if not layers:
+        return
+    bands = [b for b in (real_or_none(b) for b in (getattr(cfg.output, "band_levels", None) or [])) if b is not None and b > 0]
+    if fc is None and not bands:
+        return
+    try:
+        resolved = resolved_band(cfg, text)
+        if fc is not None:
+            warn_beyond(cfg, layers[0].name, fc, "output.band_limit", band=resolved)
+        if bands:
+            # the top band's upper edge: exact base-10 midband · 10^(1/20) (docs/spectra.md)
+            top = 1000.0 * 10.0 ** (round(10.0 * np.log10(max(bands) / 1000.0)) / 10.0 + 0.05)
+            for layer in layers:
+                warn_beyond(cfg, layer.name, top, f"output.band_levels ({max(bands):g} Hz band, {layer.name})", band=resolved)
+    except (VtbError, AttributeError, TypeError):
+        pass
+
+
+#: Bytes of generated profiles this process keeps (the least recently used go first).
+PROFILE_CACHE_BYTES = 256 * 2**20
+_profiles: OrderedDict = OrderedDict()  # key → (profile, the warnings drawing it gave)
+_profiles_lock = threading.Lock()
+if hasattr(os, "register_at_fork"):  # a child forked while another thread held the lock gets a free one
+    os.register_at_fork(after_in_child=lambda: globals().update(_profiles_lock=threading.Lock()))
+
+
+def _nbytes(profile: SampledProfile) -> int:
+    return profile.values.nbytes + sum(t.nbytes for t in profile.treads)
+
+
+def irregularity_profile(cfg: Config, text: Optional[str] = None) -> SampledProfile:
+    """The sampled irregularity a configuration runs on (arrays read-only). A structure length
+    the core will refuse gets no profile (the core then names the length). ``text``: the
+    configuration's core JSON when the caller has made it.
+
+    A profile is a function of the irregularity, the stretch the wheels travel, the memory
+    budget and the wheels' radii alone, and generating one costs tens of milliseconds: this
+    process keeps the last ones (:data:`PROFILE_CACHE_BYTES`; a larger one is not kept), so the
+    runs of a study on one sample — every design, every generation, every executor task on this
+    worker — share it. The warnings drawing it gave are given again at every call."""
+    L = real_or_none(getattr(cfg.structure, "length", None))
+    if L is None or L <= 0:
+        return SampledProfile(0.0, 1.0, np.zeros(0), [])
+    budget = real_or_none(getattr(cfg.solver, "memory_budget", None))
+    radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(v.n_wheels)]
+    # Wheels may start before the structure and end beyond it (on a rigid track).
+    try:
+        travel = gateway.wheel_travel(cfg.to_core_json() if text is None else text)
+    except (VtbError, ValueError, TypeError):  # refused later, naming the field
+        travel = None
+    lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
+    spec = json.dumps(to_plain(cfg.irregularity), default=repr)  # a measured profile's values too
+    key = (hashlib.sha256(spec.encode()).hexdigest(), lo, hi, budget, tuple(radii))
+    with _profiles_lock:
+        hit = _profiles.get(key)
+        if hit is not None:
+            _profiles.move_to_end(key)
+    if hit is None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            x0, dx, values, treads = cfg.irregularity.sample(lo - PROFILE_MARGIN, hi + PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
+        if treads and not values.size:
+            values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
+        for a in (values, *treads):
+            a.flags.writeable = False  # shared by every run on this sample
+        hit = (SampledProfile(x0, dx, values, treads), [(w.message, w.category) for w in caught])
+        if _nbytes(hit[0]) <= PROFILE_CACHE_BYTES:
+            with _profiles_lock:
+                _profiles[key] = hit
+                total = sum(_nbytes(p) for p, _ in _profiles.values())
+                while total > PROFILE_CACHE_BYTES:
+                    _, (old, _) = _profiles.popitem(last=False)
+                    total -= _nbytes(old)
+    profile, said = hit
+    for message, category in said:
+        warnings.warn(message, category, stacklevel=3)
+    return profile
+
+
+def validate(cfg: Config) -> None:
+    """The core's whole check of a configuration now, against its generated irregularity
+    (:meth:`vtb.Config.validate`)."""
+    text, profile = prepare(cfg)
+    gateway.validate(text, *profile.core_args())
