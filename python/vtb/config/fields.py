@@ -230,6 +230,7 @@ class Output(StrictFields):
     indices: Optional[list] = _default("OutputConfig", "indices")
     deck_band: float = _default("OutputConfig", "deck_band")
     band_levels: list = _default("OutputConfig", "band_levels")
+    pad_forces: bool = _default("OutputConfig", "pad_forces")
 
 
 @documented("DamperGroup")

@@ -67,6 +67,12 @@ def index_names(text: str) -> list:
     return list(_core.index_names(text))
 
 
+def index_catalog() -> list:
+    """The core's index catalogue: one ``(pattern, unit, subject, band, description)`` row per
+    kind of index."""
+    return list(_core.index_catalog())
+
+
 def model_key(text: str) -> str:
     """What the assembled model of a configuration depends on: runs with one key share it."""
     return _core.model_key(text)

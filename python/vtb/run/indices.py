@@ -1,31 +1,66 @@
 """What Python knows about the core's indices, in one place.
 
-The core names every index it computes (:func:`index_names`: ``{layer}_{quantity}`` per layer,
-``car_*`` for the first car body, ``contact_*`` for the wheels). This module adds their units
-(:func:`metric_unit`) and the lists the article's studies keep, built from layer names and
-quantities rather than spelled out.
-
-The units come from :data:`METRIC_UNITS`, a table of name endings. When the core exports its
-catalogue of indices (name pattern, unit, layer, band, description per index), :func:`metric_unit`
-is the one function to read it instead.
+The core holds the one catalogue of indices (:func:`index_catalog`: name pattern, unit, subject,
+band and description of every kind) and names every index a configuration reports
+(:func:`index_names`: ``{layer}_{quantity}`` per layer, ``car_*`` for the first car body,
+``contact_*`` for the wheels, ``pad{j}_*`` for the fasteners). This module reads units from the
+catalogue (:func:`metric_unit`) and builds the lists the article's studies keep from layer names
+and quantities rather than spelling them out.
 """
 
 from __future__ import annotations
+
+import functools
+import re
+from typing import NamedTuple
 
 from ..config import gateway
 from ..config.fields import Config
 from ..errors import config_error
 
-#: Units of the metrics by the ending of their names (``{layer}_acc_max`` → m/s²).
-METRIC_UNITS = (("_disp_max", "m"), ("_acc_max", "m/s²"), ("_acc_max_raw", "m/s²"), ("_acc_rms", "m/s²"), ("_acc_settle", "s"), ("_comfort_aw", "m/s²"), ("_force_max", "N"), ("_force_min", "N"), ("contact_loss_events", "–"))
+class IndexKind(NamedTuple):
+    """One kind of index of the core's catalogue: its name ``pattern`` (``{layer}``, ``{band}``,
+    ``{k}``, ``{w}`` or ``{j}`` standing for its subject), ``unit``, ``subject`` (what it is taken
+    of), ``band`` (of the record it is taken from: ``raw``, ``band_limit``, ``deck_band``,
+    ``third_octave``, ``iso2631_wk``) and ``description``."""
+
+    pattern: str
+    unit: str
+    subject: str
+    band: str
+    description: str
+
+
+@functools.lru_cache(maxsize=None)
+def index_catalog() -> tuple:
+    """Every kind of index the core computes (:class:`IndexKind` rows, in its order)."""
+    return tuple(IndexKind(*row) for row in gateway.index_catalog())
+
+
+_PLACEHOLDER = {"{layer}": ".+", "{band}": r"[0-9.eE+-]+", "{k}": r"[0-9]+", "{w}": r"[0-9]+", "{j}": r"[0-9]+"}
+
+
+@functools.lru_cache(maxsize=None)
+def _patterns() -> tuple:
+    def regex(pattern: str):
+        parts = re.split(r"(\{[a-z]+\})", pattern)
+        return re.compile("^" + "".join(_PLACEHOLDER.get(p, re.escape(p)) for p in parts) + "$")
+
+    return tuple((regex(k.pattern), k) for k in index_catalog())
+
+
+def kind_of(name: str) -> IndexKind:
+    """The catalogue's kind of the index ``name`` (``rail_acc_max`` → ``{layer}_acc_max``)."""
+    if isinstance(name, str):
+        for rx, kind in _patterns():
+            if rx.match(name):
+                return kind
+    raise config_error("metric", name, "no such metric")
 
 
 def metric_unit(name: str) -> str:
-    """The unit of a metric (``"m/s²"`` for ``rail_acc_max``)."""
-    for ending, unit in METRIC_UNITS:
-        if name.endswith(ending):
-            return unit
-    raise config_error("metric", name, "no such metric")
+    """The unit of a metric (``"m/s²"`` for ``rail_acc_max``), from the core's catalogue."""
+    return kind_of(name).unit
 
 
 def index_names(config: Config) -> list:

@@ -36,6 +36,9 @@ class Result:
       Z_t2, β_t2, Z_w1..Z_w4] for the 10-DOF car, [Z_c, Z_w] for a quarter car), displacements
       relative to the static equilibrium at t = 0;
     * ``contact_force`` (N): shape (n_t, n_wheels), force on the modelled rail per wheel;
+    * ``pad_force`` (N): shape (n_t, n_pads), with ``output.pad_forces`` the force (spring and
+      dashpot, compression positive) in the rail fastener nearest each observation point, else
+      shape (n_t, 0);
     * ``contact_loss``: list of (wheel, t_start, t_end or None) periods without contact.
     """
 
@@ -45,6 +48,7 @@ class Result:
     vehicle_disp: np.ndarray
     vehicle_acc: np.ndarray
     contact_force: np.ndarray
+    pad_force: np.ndarray
     contact_loss: list
     layer_names: list
     points: list
@@ -66,7 +70,7 @@ class Result:
         return dict(self._metrics)
 
     #: The array fields compared by value in ``==``.
-    _ARRAYS = ("t", "disp", "acc", "vehicle_disp", "vehicle_acc", "contact_force")
+    _ARRAYS = ("t", "disp", "acc", "vehicle_disp", "vehicle_acc", "contact_force", "pad_force")
 
     def __eq__(self, other) -> bool:
         """Equal by value: the same configuration, the same histories bit for bit (``np.array_equal``),
@@ -219,6 +223,7 @@ class Result:
             vehicle_disp=self.vehicle_disp,
             vehicle_acc=self.vehicle_acc,
             contact_force=self.contact_force,
+            pad_force=self.pad_force,
             layer_names=np.array(self.layer_names),
             points=np.array(self.points),
             metric_names=np.array(list(self._metrics)),
@@ -241,6 +246,7 @@ def load(path) -> Result:
             return Result(
                 t=d["t"], disp=d["disp"], acc=d["acc"], vehicle_disp=d["vehicle_disp"], vehicle_acc=d["vehicle_acc"],
                 contact_force=d["contact_force"], contact_loss=loss, layer_names=[str(n) for n in d["layer_names"]],
+                pad_force=d["pad_force"] if "pad_force" in d else np.zeros((d["t"].size, 0)),
                 points=[float(p) for p in d["points"]], config=Config.from_toml_text(str(d["config"])),
                 _metrics={str(k): float(v) for k, v in zip(d["metric_names"], d["metric_values"])},
             )
@@ -259,6 +265,7 @@ def _result(out: dict, config: Config) -> Result:
         vehicle_disp=out["vehicle_disp"],
         vehicle_acc=out["vehicle_acc"],
         contact_force=out["contact_force"],
+        pad_force=out["pad_force"],
         contact_loss=out["contact_loss"],
         layer_names=out["layer_names"],
         points=out["points"],

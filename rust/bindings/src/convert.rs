@@ -65,6 +65,10 @@ pub(crate) fn result_to_dict<'py>(py: Python<'py>, r: RunResult) -> PyResult<Bou
         "contact_force",
         PyArray1::from_vec(py, r.contact_force).reshape([steps, r.n_wheels])?,
     )?;
+    d.set_item(
+        "pad_force",
+        PyArray1::from_vec(py, r.pad_force).reshape([steps, r.n_pads])?,
+    )?;
     let losses = PyList::empty(py);
     for l in &r.contact_loss {
         losses.append((l.wheel, l.t_start, l.t_end))?;

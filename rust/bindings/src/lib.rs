@@ -27,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::run::batch, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::schema, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::index_names, m)?)?;
+    m.add_function(wrap_pyfunction!(api::config::index_catalog, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::model_key, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::check_schema, m)?)?;
     m.add_function(wrap_pyfunction!(api::signal::low_pass, m)?)?;

@@ -65,7 +65,14 @@ pub fn history_bytes(cfg: &Config, record: Record) -> f64 {
     } else {
         2.0
     };
-    steps * (per_observer * layers * points + 2.0 * vehicle + wheels) * F64
+    // A pad's force, and on the synthesis its two ends' readouts and residuals.
+    let pads = crate::outputs::catalog::pads_of(cfg).len() as f64;
+    let per_pad = if cfg.discretisation.synthesis_cutoff.is_some() {
+        11.0
+    } else {
+        1.0
+    };
+    steps * (per_observer * layers * points + 2.0 * vehicle + wheels + per_pad * pads) * F64
 }
 
 fn refuse(

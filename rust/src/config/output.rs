@@ -44,6 +44,12 @@ pub struct OutputConfig {
     /// frequency bins of the record. Empty (the default): no band levels.
     #[serde(default)]
     pub band_levels: Vec<f64>,
+    /// Record (true/false) the force in the rail fastener nearest each observation point j: the
+    /// first discrete coupling point between the top layer and another layer, its spring and
+    /// dashpot force (N, compression positive), reported as the index `pad{j}_force_range`
+    /// (the load range of a fatigue check). Off by default: it adds two observers per point.
+    #[serde(default)]
+    pub pad_forces: bool,
 }
 
 impl Default for OutputConfig {
@@ -55,6 +61,7 @@ impl Default for OutputConfig {
             indices: None,
             deck_band: default_deck_band(),
             band_levels: Vec::new(),
+            pad_forces: false,
         }
     }
 }

@@ -2,115 +2,19 @@
 //! index catalogue, band levels, the band-limiting filter and ride comfort.
 
 pub mod bands;
+pub mod catalog;
 pub mod comfort;
 pub mod filter;
 pub mod indices;
 
-use crate::config::{Config, VehicleConfig};
+pub use catalog::{DECK, index_layers, index_names, layer_of_index};
+
+use crate::config::Config;
 use crate::model::structure::Structure;
-use crate::outputs::filter::low_pass;
-use crate::outputs::indices::{amplitude, rms, settle_time};
+use catalog::{band_index, car_comfort, layer_index};
+use filter::low_pass;
+use indices::{amplitude, rms, settle_time};
 use std::collections::BTreeMap;
-
-/// The indices of every recorded layer (`{layer}_{suffix}`).
-const LAYER_INDICES: [&str; 4] = ["disp_max", "acc_max", "acc_rms", "acc_settle"];
-/// A layer's raw acceleration peak, kept beside a band-limited one.
-const RAW_PEAK: &str = "acc_max_raw";
-/// A layer's equivalent acceleration level (dB) with band levels (`acc_L{band}`).
-const LEQ: &str = "acc_Leq";
-
-/// A layer's band-level index suffix for the band labelled `nominal` (Hz).
-fn band_suffix(nominal: f64) -> String {
-    format!("acc_L{nominal}")
-}
-/// The first car's indices.
-const CAR_INDICES: [&str; 3] = ["car_disp_max", "car_acc_max", "car_acc_rms"];
-/// The first car body's ride comfort, ISO 2631-1's Wk-weighted r.m.s. a_w ([`crate::outputs::comfort`]).
-const COMFORT: &str = "car_comfort_aw";
-/// The deck acceleration of EN 1990 A2: the bottom layer's, low-passed at `output.deck_band`.
-pub const DECK: &str = "deck_acc_max";
-/// Each wheel's force extremes (`wheel{w}_{suffix}`).
-const WHEEL_INDICES: [&str; 2] = ["force_max", "force_min"];
-/// The wheels' indices.
-const CONTACT_INDICES: [&str; 3] = [
-    "contact_force_max",
-    "contact_force_min",
-    "contact_loss_events",
-];
-
-/// Every index a run of `cfg` can report (`output.indices` names a subset of these).
-pub fn index_names(cfg: &Config) -> Vec<String> {
-    let mut out = Vec::new();
-    for l in &cfg.structure.layers {
-        let raw = cfg.output.band_limit.map(|_| RAW_PEAK);
-        for s in LAYER_INDICES.iter().copied().chain(raw) {
-            out.push(format!("{}_{s}", l.name));
-        }
-        if !cfg.output.band_levels.is_empty() {
-            out.push(format!("{}_{LEQ}", l.name));
-        }
-        for &f in &cfg.output.band_levels {
-            out.push(format!("{}_{}", l.name, band_suffix(f)));
-        }
-    }
-    if cfg.structure.layers.len() > 1 {
-        out.push(DECK.to_string());
-    }
-    if !cfg.vehicles.is_empty() {
-        out.extend(CAR_INDICES.map(String::from));
-        if 1.0 / cfg.solver.dt >= crate::outputs::comfort::MIN_RATE {
-            out.push(COMFORT.to_string());
-            out.extend((1..cfg.vehicles.len()).map(car_comfort));
-        }
-        out.extend(CONTACT_INDICES.map(String::from));
-        for w in 0..cfg
-            .vehicles
-            .iter()
-            .map(VehicleConfig::n_wheels)
-            .sum::<usize>()
-        {
-            out.extend(WHEEL_INDICES.map(|s| format!("wheel{w}_{s}")));
-        }
-    }
-    out
-}
-
-/// The ride comfort index of car `k` (the first car's is `car_comfort_aw`).
-fn car_comfort(k: usize) -> String {
-    if k == 0 {
-        COMFORT.to_string()
-    } else {
-        format!("car{k}_comfort_aw")
-    }
-}
-
-/// The layers a run's metrics need (`output.indices`; every layer without them), by index.
-pub fn index_layers(cfg: &Config) -> Vec<usize> {
-    let layers = &cfg.structure.layers;
-    match &cfg.output.indices {
-        None => (0..layers.len()).collect(),
-        Some(names) => (0..layers.len())
-            .filter(|&li| {
-                names.iter().any(|n| {
-                    layer_of_index(n, &layers[li].name) || (n == DECK && li + 1 == layers.len())
-                })
-            })
-            .collect(),
-    }
-}
-
-/// Whether `name` is an index of the layer `layer`.
-pub fn layer_of_index(name: &str, layer: &str) -> bool {
-    name.strip_prefix(layer)
-        .and_then(|s| s.strip_prefix('_'))
-        .is_some_and(|s| {
-            LAYER_INDICES.contains(&s)
-                || s == RAW_PEAK
-                || s == LEQ
-                || s.strip_prefix("acc_L")
-                    .is_some_and(|f| f.parse::<f64>().is_ok())
-        })
-}
 
 /// A period during which a wheel had no contact (P = 0). `t_end` is `None` if contact was
 /// not regained before the end of the run.
@@ -122,7 +26,7 @@ pub struct ContactLoss {
 }
 
 /// What a run keeps: everything, or only the series its metrics are computed from (the layers
-/// its indices need, `Config::index_layers`, at the first observation point; the first car
+/// its indices need, `catalog::index_layers`, at the first observation point; the first car
 /// body's bounce; the contact forces): the batch of a study never holds the full histories of
 /// all its jobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -178,6 +82,10 @@ pub struct RunResult {
     pub deck: Option<usize>,
     /// Low-pass frequency (Hz) of `deck_acc_max`, `output.deck_band`.
     pub deck_band: f64,
+    /// Rail fasteners recorded (`output.pad_forces`: the one nearest each observation point).
+    pub n_pads: usize,
+    /// Force in each of them (N, compression positive) at `[step·n_pads + pad]`.
+    pub pad_force: Vec<f64>,
 }
 
 impl RunResult {
@@ -224,6 +132,8 @@ impl RunResult {
                 .then(|| layers.iter().position(|&l| l + 1 == st.layers.len()))
                 .flatten(),
             deck_band: cfg.output.deck_band,
+            n_pads: catalog::pads_of(cfg).len(),
+            pad_force: vec![0.0; len * catalog::pads_of(cfg).len()],
         }
     }
 
@@ -263,7 +173,9 @@ impl RunResult {
     /// and each further car's `car{k}_comfort_aw`; the deck acceleration `deck_acc_max` (the
     /// bottom layer's, low-passed at `output.deck_band`, EN 1990 A2); `contact_force_max`,
     /// `contact_force_min`, `contact_loss_events` over all wheels and each wheel's
-    /// `wheel{w}_force_max`, `wheel{w}_force_min`.
+    /// `wheel{w}_force_max`, `wheel{w}_force_min`; with `output.pad_forces`, the force range
+    /// `pad{j}_force_range` of the rail fastener nearest each observation point j. The
+    /// catalogue ([`catalog`]) lists them all with their units and bands.
     ///
     /// With an analysis window ([`RunResult::window`]) every metric is taken over the steps
     /// inside it; settle times are still counted from t = 0.
@@ -279,97 +191,122 @@ impl RunResult {
     /// With `output.indices` ([`RunResult::indices`]) only those are reported.
     pub fn metrics(&self) -> BTreeMap<String, f64> {
         let steps = self.window_steps();
-        let t0 = *steps.start() as f64 * self.dt;
         let mut m = BTreeMap::new();
-        let limited = |a: Vec<f64>| match self.band_limit {
-            Some(fc) => low_pass(&a, fc, self.dt),
-            None => a,
-        };
-        for (li, name) in self.layer_names.iter().enumerate() {
-            let d = &self.layer_disp(li, 0)[steps.clone()];
-            let raw = self.layer_acc(li, 0);
-            if self.band_limit.is_some() {
-                m.insert(format!("{name}_{RAW_PEAK}"), amplitude(&raw[steps.clone()]));
-            }
-            let a = &limited(raw)[steps.clone()];
-            let values = [
-                amplitude(d),
-                amplitude(a),
-                rms(a),
-                t0 + settle_time(a, self.dt, 0.05),
-            ];
-            for (s, v) in LAYER_INDICES.iter().zip(values) {
-                m.insert(format!("{name}_{s}"), v);
-            }
-            let wanted = std::iter::once(LEQ.to_string())
-                .chain(self.band_levels.iter().map(|&f| band_suffix(f)))
-                .any(|s| self.wants(&format!("{name}_{s}")));
-            if !self.band_levels.is_empty() && wanted {
-                let raw = &self.layer_acc(li, 0)[steps.clone()];
-                let powers = crate::outputs::bands::band_powers(raw, self.dt, &self.band_levels);
-                for (&f, p) in self.band_levels.iter().zip(powers) {
-                    let level =
-                        crate::outputs::bands::level(p, crate::outputs::bands::ACC_REFERENCE);
-                    m.insert(format!("{name}_{}", band_suffix(f)), level);
-                }
-                let ms = rms(raw).powi(2);
-                m.insert(
-                    format!("{name}_{LEQ}"),
-                    crate::outputs::bands::level(ms, crate::outputs::bands::ACC_REFERENCE),
-                );
-            }
-        }
-        if self.n_cars > 0 {
-            let d = &self.vehicle_dof_disp(0, 0)[steps.clone()];
-            let a = &limited(self.vehicle_dof_acc(0, 0))[steps.clone()];
-            for (s, v) in CAR_INDICES.iter().zip([amplitude(d), amplitude(a), rms(a)]) {
-                m.insert(s.to_string(), v);
-            }
-            for k in 0..self.n_cars {
-                let name = car_comfort(k);
-                if self.wants(&name) && 1.0 / self.dt >= crate::outputs::comfort::MIN_RATE {
-                    // weighted from the window's start, as vtb.comfort weights a windowed record
-                    let raw = &self.vehicle_dof_acc(k, 0)[steps.clone()];
-                    m.insert(name, crate::outputs::comfort::weighted_rms(raw, self.dt));
-                }
-            }
-        }
+        self.layer_metrics(&steps, &mut m);
+        self.car_metrics(&steps, &mut m);
         if let Some(d) = self.deck.filter(|_| self.wants(DECK)) {
             let a = low_pass(&self.layer_acc(d, 0), self.deck_band, self.dt);
             m.insert(DECK.to_string(), amplitude(&a[steps.clone()]));
         }
-        if self.n_wheels > 0 {
-            let nw = self.n_wheels;
-            let (lo, hi) = self.contact_force[*steps.start() * nw..(*steps.end() + 1) * nw]
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(*v), hi.max(*v))
-                });
-            let (ta, tb) = (t0, *steps.end() as f64 * self.dt);
-            let events = self
-                .contact_loss
-                .iter()
-                .filter(|e| e.t_start <= tb && e.t_end.is_none_or(|t| t >= ta))
-                .count();
-            for (s, v) in CONTACT_INDICES.iter().zip([hi, lo, events as f64]) {
-                m.insert(s.to_string(), v);
-            }
-            for w in 0..nw {
-                let f = &self.wheel_force(w)[steps.clone()];
-                let (lo, hi) = f
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                        (lo.min(*v), hi.max(*v))
-                    });
-                for (s, v) in WHEEL_INDICES.iter().zip([hi, lo]) {
-                    m.insert(format!("wheel{w}_{s}"), v);
-                }
-            }
+        self.contact_metrics(&steps, &mut m);
+        for j in 0..self.n_pads {
+            let f = &Self::column(&self.pad_force, self.n_pads, j)[steps.clone()];
+            let (lo, hi) = extremes(f);
+            m.insert(format!("pad{j}_force_range"), hi - lo);
         }
         if let Some(keep) = &self.indices {
             m.retain(|k, _| keep.contains(k));
         }
         m
+    }
+
+    /// A record low-passed at the band limit (as it is without one).
+    fn limited(&self, a: Vec<f64>) -> Vec<f64> {
+        match self.band_limit {
+            Some(fc) => low_pass(&a, fc, self.dt),
+            None => a,
+        }
+    }
+
+    /// Every recorded layer's indices at the first observation point.
+    fn layer_metrics(&self, steps: &Steps, m: &mut BTreeMap<String, f64>) {
+        let t0 = *steps.start() as f64 * self.dt;
+        for (li, name) in self.layer_names.iter().enumerate() {
+            let d = &self.layer_disp(li, 0)[steps.clone()];
+            let raw = self.layer_acc(li, 0);
+            if self.band_limit.is_some() {
+                let peak = amplitude(&raw[steps.clone()]);
+                m.insert(layer_index(name, "acc_max_raw"), peak);
+            }
+            let a = &self.limited(raw)[steps.clone()];
+            let values = [
+                ("disp_max", amplitude(d)),
+                ("acc_max", amplitude(a)),
+                ("acc_rms", rms(a)),
+                ("acc_settle", t0 + settle_time(a, self.dt, 0.05)),
+            ];
+            for (s, v) in values {
+                m.insert(layer_index(name, s), v);
+            }
+            let leq = layer_index(name, "acc_Leq");
+            let wanted = std::iter::once(leq.clone())
+                .chain(self.band_levels.iter().map(|&f| band_index(name, f)))
+                .any(|s| self.wants(&s));
+            if !self.band_levels.is_empty() && wanted {
+                let raw = &self.layer_acc(li, 0)[steps.clone()];
+                let powers = bands::band_powers(raw, self.dt, &self.band_levels);
+                for (&f, p) in self.band_levels.iter().zip(powers) {
+                    m.insert(band_index(name, f), bands::level(p, bands::ACC_REFERENCE));
+                }
+                let ms = rms(raw).powi(2);
+                m.insert(leq, bands::level(ms, bands::ACC_REFERENCE));
+            }
+        }
+    }
+
+    /// The first car body's indices and every car's ride comfort.
+    fn car_metrics(&self, steps: &Steps, m: &mut BTreeMap<String, f64>) {
+        if self.n_cars == 0 {
+            return;
+        }
+        let d = &self.vehicle_dof_disp(0, 0)[steps.clone()];
+        let a = &self.limited(self.vehicle_dof_acc(0, 0))[steps.clone()];
+        for (s, v) in [
+            ("car_disp_max", amplitude(d)),
+            ("car_acc_max", amplitude(a)),
+            ("car_acc_rms", rms(a)),
+        ] {
+            m.insert(s.to_string(), v);
+        }
+        for k in 0..self.n_cars {
+            let name = car_comfort(k);
+            if self.wants(&name) && 1.0 / self.dt >= comfort::MIN_RATE {
+                // weighted from the window's start, as vtb.comfort weights a windowed record
+                let raw = &self.vehicle_dof_acc(k, 0)[steps.clone()];
+                m.insert(name, comfort::weighted_rms(raw, self.dt));
+            }
+        }
+    }
+
+    /// The contact forces' extremes over all wheels and each wheel's, and the losses of
+    /// contact within the window.
+    fn contact_metrics(&self, steps: &Steps, m: &mut BTreeMap<String, f64>) {
+        if self.n_wheels == 0 {
+            return;
+        }
+        let nw = self.n_wheels;
+        let (lo, hi) = extremes(&self.contact_force[*steps.start() * nw..(*steps.end() + 1) * nw]);
+        let (ta, tb) = (
+            *steps.start() as f64 * self.dt,
+            *steps.end() as f64 * self.dt,
+        );
+        let events = self
+            .contact_loss
+            .iter()
+            .filter(|e| e.t_start <= tb && e.t_end.is_none_or(|t| t >= ta))
+            .count();
+        for (s, v) in [
+            ("contact_force_max", hi),
+            ("contact_force_min", lo),
+            ("contact_loss_events", events as f64),
+        ] {
+            m.insert(s.to_string(), v);
+        }
+        for w in 0..nw {
+            let (lo, hi) = extremes(&self.wheel_force(w)[steps.clone()]);
+            m.insert(format!("wheel{w}_force_max"), hi);
+            m.insert(format!("wheel{w}_force_min"), lo);
+        }
     }
 
     /// Whether `output.indices` asks for `name` (every index without it).
@@ -383,6 +320,17 @@ impl RunResult {
     fn window_steps(&self) -> std::ops::RangeInclusive<usize> {
         window_steps(self.window, self.dt, self.n_steps)
     }
+}
+
+/// The steps of a run inside its analysis window.
+type Steps = std::ops::RangeInclusive<usize>;
+
+/// (min, max) of a record.
+fn extremes(x: &[f64]) -> (f64, f64) {
+    x.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        })
 }
 
 /// The steps of a run of `n_steps` steps of `dt` s inside the analysis window `window` (all
@@ -400,40 +348,5 @@ pub fn window_steps(
             let last = ((t1 / dt) + 1e-9).floor() as usize;
             first.min(n_steps)..=last.min(n_steps).max(first.min(n_steps))
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::library::presets;
-
-    /// A train's indices: every car's comfort, every wheelset's force extremes and the deck's
-    /// acceleration; a single layer has no deck.
-    #[test]
-    fn a_train_has_indices_per_car_and_per_wheel() {
-        let mut cfg = presets::paper();
-        let mut second = cfg.vehicles[0].clone();
-        second.x_front += 25.0;
-        cfg.vehicles.push(second);
-        let names = index_names(&cfg);
-        for n in [
-            "car_comfort_aw",
-            "car1_comfort_aw",
-            "wheel0_force_max",
-            "wheel7_force_min",
-            DECK,
-        ] {
-            assert!(names.iter().any(|k| k == n), "{n}");
-        }
-        assert!(
-            !names
-                .iter()
-                .any(|k| k == "car2_comfort_aw" || k == "wheel8_force_max")
-        );
-        cfg.output.indices = Some(vec![DECK.into()]);
-        assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
-        cfg.structure.layers.truncate(1);
-        assert!(!index_names(&cfg).iter().any(|k| k == DECK));
     }
 }

@@ -92,6 +92,30 @@ pub(crate) fn index_names(py: Python<'_>, config_json: &str) -> PyResult<Vec<Str
     Ok(vtb::outputs::index_names(&parse_config(py, config_json)?))
 }
 
+/// The index catalogue: one `(pattern, unit, subject, band, description)` row per kind of
+/// index (`vtb::outputs::catalog`).
+#[pyfunction]
+pub(crate) fn index_catalog() -> Vec<(
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+)> {
+    vtb::outputs::catalog::CATALOG
+        .iter()
+        .map(|k| {
+            (
+                k.pattern,
+                k.unit,
+                k.subject.name(),
+                k.band.name(),
+                k.description,
+            )
+        })
+        .collect()
+}
+
 /// The key under which the core lets jobs share one model (and run in lockstep): their
 /// configurations equal up to the dampers' parameters.
 #[pyfunction]

@@ -22,6 +22,8 @@ pub(super) struct RailCorrection<'m> {
     /// s_j(x_o)/k_j at each rail observation point.
     pub(super) inv_k: Vec<f64>,
     pub(super) obs: Vec<Vec<f64>>,
+    /// The same at each recorded pad (`output.pad_forces`).
+    pub(super) pad_obs: Vec<Vec<f64>>,
     /// s_j at each wheel, then at each moving force on the rail, this step (row-major).
     pub(super) sines: Vec<f64>,
     /// (x0, magnitude) of the moving forces on the rail.
@@ -58,14 +60,36 @@ impl RailCorrection<'_> {
     /// forces `p` and the rail's moving forces (output only: in the contact this static
     /// flexibility would replace the local modes' mass-like behaviour at ω_r, docs/fesea.md).
     pub(super) fn observed_deflection(&self, j: usize, p: &[f64]) -> f64 {
+        self.deflection(&self.obs[j], p)
+    }
+
+    /// The same at recorded pad `j`.
+    pub(super) fn pad_deflection(&self, j: usize, p: &[f64]) -> f64 {
+        self.deflection(&self.pad_obs[j], p)
+    }
+
+    /// Σ over the loads of w·(s_j(x)/k_j)·s_j(x_load): the local modes' static deflection at
+    /// the point whose `static_sines` are `at`.
+    fn deflection(&self, at: &[f64], p: &[f64]) -> f64 {
         let loads = p.iter().copied().chain(self.movers.iter().map(|m| m.1));
         loads
             .enumerate()
-            .map(|(r, w)| w * dot(&self.obs[j], self.row(r)))
+            .map(|(r, w)| w * dot(at, self.row(r)))
             .sum()
     }
 }
 
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// s_j(x)/k_j of every local mode: the local modes' static flexibility at x per unit load at
+/// a point with sines s_j (mode-acceleration recovery of their deflection).
+pub(super) fn static_sines(fs: &FeSea, x: f64) -> Vec<f64> {
+    let mut s = vec![0.0; fs.modes.len()];
+    fs.local_sines_into(x, &mut s);
+    s.iter()
+        .zip(&fs.modes)
+        .map(|(s, m)| s / m.stiffness)
+        .collect()
 }

@@ -17,8 +17,9 @@ use crate::error::{Result, VtbError};
 use crate::linalg::sparse::Ldlt;
 use crate::model::Model;
 use crate::model::basis::Shape;
+use crate::outputs::catalog::{Pad, pads_of};
 use crate::outputs::{Record, RunResult};
-use correction::{RailCorrection, dot};
+use correction::{RailCorrection, dot, static_sines};
 
 /// The Newmark engine's side of W coupled runs on one model.
 pub(super) struct NewmarkSide<'m, const W: usize> {
@@ -44,6 +45,9 @@ pub(super) struct NewmarkSide<'m, const W: usize> {
     rail_free: Vec<f64>,
     /// The end of the step under way (s).
     t1: f64,
+    /// Observers of the layers' records (the first ones), then of each pad's two ends.
+    n_layer_obs: usize,
+    pads: Vec<Pad>,
 }
 
 /// W coupled runs of one model on the Newmark engine.
@@ -164,6 +168,12 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
                 track.observe(&st.shape(li, x));
             }
         }
+        let n_layer_obs = track.n_observed();
+        let pads = pads_of(cfg);
+        for pad in &pads {
+            track.observe(&st.shape(0, pad.x));
+            track.observe(&st.shape(pad.lower, pad.x));
+        }
         let movers = Mover::all(cfg);
         let n = track.n;
         let shape_len = st
@@ -197,14 +207,12 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
                 obs: points
                     .iter()
                     .filter(|_| cfg.discretisation.local_deflection && layers.first() == Some(&0))
-                    .map(|&x| {
-                        let mut s = vec![0.0; fs.modes.len()];
-                        fs.local_sines_into(x, &mut s);
-                        s.iter()
-                            .zip(&fs.modes)
-                            .map(|(s, m)| s / m.stiffness)
-                            .collect()
-                    })
+                    .map(|&x| static_sines(fs, x))
+                    .collect(),
+                pad_obs: pads
+                    .iter()
+                    .filter(|_| cfg.discretisation.local_deflection)
+                    .map(|p| static_sines(fs, p.x))
                     .collect(),
                 sines: Vec::new(),
                 movers: rail_movers,
@@ -228,6 +236,8 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             scratch: Default::default(),
             rail_free: Vec::new(),
             t1: 0.0,
+            n_layer_obs,
+            pads,
             track,
         })
     }

@@ -187,7 +187,7 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
     }
 
     fn record(&mut self, res: &mut [RunResult], step: usize, p: &[f64], live: &[bool; W]) {
-        let no = self.track.n_observed();
+        let no = self.n_layer_obs;
         let nw = self.rail_free.len() / W;
         for (lane, r) in res.iter_mut().enumerate() {
             if !live[lane] {
@@ -204,6 +204,15 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
                 for j in 0..rc.obs.len() {
                     r.disp[step * no + j] += rc.observed_deflection(j, pl);
                 }
+            }
+            let np = self.pads.len();
+            for (j, pad) in self.pads.iter().enumerate() {
+                let (mut uu, vu, _) = self.track.observed(no + 2 * j, lane);
+                let (ul, vl, _) = self.track.observed(no + 2 * j + 1, lane);
+                if let Some(rc) = self.correction.as_ref().filter(|rc| !rc.pad_obs.is_empty()) {
+                    uu += rc.pad_deflection(j, &p[lane * nw..(lane + 1) * nw]);
+                }
+                r.pad_force[step * np + j] = pad.force(uu - ul, vu - vl);
             }
         }
     }

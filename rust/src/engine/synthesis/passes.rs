@@ -461,7 +461,7 @@ impl<const W: usize> StructureSide<W> for SynthesisSide<'_, W> {
     /// The readouts of every live lane at `step` (the force's direct terms from the ports'
     /// forces this step) and the rail residual.
     fn record(&mut self, _res: &mut [RunResult], step: usize, p: &[f64], live: &[bool; W]) {
-        let (nw, no, n_rail) = (self.nw(), self.observers.len(), self.n_rail);
+        let (nw, no) = (self.nw(), self.observers.len());
         for c in (0..W).filter(|&c| live[c]) {
             let pl = &p[c * nw..(c + 1) * nw];
             let gl = &self.g_now[c * nw..(c + 1) * nw];
@@ -484,7 +484,7 @@ impl<const W: usize> StructureSide<W> for SynthesisSide<'_, W> {
                     zy[1],
                 ]);
                 if let Some(s) = &obs.rail_shape {
-                    self.lanes[c].residual[step * n_rail + o] =
+                    self.lanes[c].residual[step * no + o] =
                         self.wheel_residual(s, gl) + self.mover_residual(s);
                 }
             }
@@ -504,8 +504,9 @@ impl<const W: usize> StructureSide<W> for SynthesisSide<'_, W> {
 
     /// The lane's records made of its readouts.
     fn finish(&mut self, c: usize, r: &mut RunResult) {
-        let (no, n_rail, dt) = (self.observers.len(), self.n_rail, self.dt());
+        let (no, dt) = (self.observers.len(), self.dt());
         let lane = &self.lanes[c];
-        records(r, &lane.readouts, &lane.residual, no, n_rail, dt);
+        let observers = (no, no - 2 * self.pads.len());
+        records(r, &lane.readouts, &lane.residual, observers, &self.pads, dt);
     }
 }

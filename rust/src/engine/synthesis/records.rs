@@ -3,6 +3,7 @@
 use super::run::{DamperLane, READOUTS};
 use crate::error::VtbError;
 use crate::outputs::RunResult;
+use crate::outputs::catalog::Pad;
 
 /// A record of n samples padded by two on each side: constant before t = 0 (the loads stood
 /// still), linear past the end.
@@ -18,7 +19,8 @@ fn padded(n: usize, f: impl Fn(usize) -> f64) -> Vec<f64> {
 }
 
 /// The displacement and acceleration records of a finished run from its readouts and the rail
-/// residual r (`[step·no + j]` in `r.disp`, `r.acc`):
+/// residual r (readouts and residual of the `no` observers at `[step·no + j]`, the first
+/// `no_layer` of them into `r.disp`, `r.acc` at `[step·no_layer + j]`):
 ///
 ///   u = E(d) + r,   ü = E(e + D₂r) + z + D₁y.
 ///
@@ -28,33 +30,51 @@ fn padded(n: usize, f: impl Fn(usize) -> f64) -> Vec<f64> {
 /// 1 + (1 − cos ωh)/6 is 1/sinc²(ωh/2) to O((ωh)⁴) (0.2 % at 2 kHz, h = 5e-5 s), equalises
 /// them. The force samples themselves are exact (z), and the force-rate term w·ġ is the
 /// fourth-order central difference D₁ of y.
+///
+/// The observers after those are the pads' two ends (`pads`), read for velocity (their second
+/// readout is Re Σ λψᵀs·Q): u̇ = E(e′) + y + D₁r, and the pad's force from both ends'
+/// displacement and velocity into `r.pad_force`.
 pub(super) fn records(
     r: &mut RunResult,
     readouts: &[f64],
     residual: &[f64],
-    no: usize,
-    n_rail: usize,
+    (no, no_layer): (usize, usize),
+    pads: &[Pad],
     dt: f64,
 ) {
     let n = readouts.len() / (no * READOUTS).max(1);
     let e = |x: &[f64], s: usize| (14.0 * x[s + 2] - x[s + 1] - x[s + 3]) / 12.0;
-    for j in 0..no {
+    let d1 =
+        |y: &[f64], s: usize| (y[s] - 8.0 * y[s + 1] + 8.0 * y[s + 3] - y[s + 4]) / (12.0 * dt);
+    let series = |j: usize, k: usize| padded(n, |s| readouts[(s * no + j) * READOUTS + k]);
+    for j in 0..no_layer {
         let rd = |k: usize, s: usize| readouts[(s * no + j) * READOUTS + k];
-        let rr = padded(n, |s| {
-            if j < n_rail {
-                residual[s * n_rail + j]
-            } else {
-                0.0
-            }
-        });
-        let (d, y) = (padded(n, |s| rd(0, s)), padded(n, |s| rd(3, s)));
+        let rr = padded(n, |s| residual[s * no + j]);
+        let (d, y) = (series(j, 0), series(j, 3));
         let inner = padded(n, |s| {
             rd(1, s) + (rr[s + 3] - 2.0 * rr[s + 2] + rr[s + 1]) / (dt * dt)
         });
         for s in 0..n {
-            r.disp[s * no + j] = e(&d, s) + rr[s + 2];
-            let d1 = (y[s] - 8.0 * y[s + 1] + 8.0 * y[s + 3] - y[s + 4]) / (12.0 * dt);
-            r.acc[s * no + j] = e(&inner, s) + rd(2, s) + d1;
+            r.disp[s * no_layer + j] = e(&d, s) + rr[s + 2];
+            r.acc[s * no_layer + j] = e(&inner, s) + rd(2, s) + d1(&y, s);
+        }
+    }
+    let np = pads.len();
+    for (p, pad) in pads.iter().enumerate() {
+        // (u, u̇) of the pad's upper and lower end at every sample.
+        let ends: Vec<Vec<(f64, f64)>> = (0..2)
+            .map(|end| {
+                let j = no_layer + 2 * p + end;
+                let rr = padded(n, |s| residual[s * no + j]);
+                let (d, v, y) = (series(j, 0), series(j, 1), series(j, 3));
+                (0..n)
+                    .map(|s| (e(&d, s) + rr[s + 2], e(&v, s) + y[s + 2] + d1(&rr, s)))
+                    .collect()
+            })
+            .collect();
+        for s in 0..n {
+            let ((uu, vu), (ul, vl)) = (ends[0][s], ends[1][s]);
+            r.pad_force[s * np + p] = pad.force(uu - ul, vu - vl);
         }
     }
 }

@@ -35,6 +35,7 @@ use crate::error::{Result, VtbError};
 use crate::model::Model;
 use crate::model::basis::Shape;
 use crate::model::dampers::{Branch, BranchState};
+use crate::outputs::catalog::{Pad, pads_of};
 use crate::outputs::{Record, RunResult};
 use std::sync::Arc;
 
@@ -152,8 +153,8 @@ pub(super) struct Lane {
     /// The error of a lane whose dampers' port equations are singular.
     pub(super) setup: Option<VtbError>,
     /// The observers' readouts per step, `[(step·no + j)·READOUTS + k]`, and the rail
-    /// observers' residual displacement `[step·n_rail + j]`: the records are made of them once
-    /// the run is over (`records`).
+    /// observers' residual displacement `[step·no + j]` (0 off the rail): the records are made
+    /// of them once the run is over (`records`).
     pub(super) readouts: Vec<f64>,
     pub(super) residual: Vec<f64>,
 }
@@ -221,7 +222,8 @@ pub(super) struct SynthesisSide<'a, const W: usize> {
     pub(super) observers: Vec<Observer>,
     /// The observers' kernel vectors (`Observer::psi`).
     pub(super) observer_psi: Vec<[CVec; 2]>,
-    pub(super) n_rail: usize,
+    /// The pads whose force the run records (their two ends are the last observers).
+    pub(super) pads: Vec<Pad>,
     pub(super) lanes: Vec<Lane>,
     /// The wheels' rail shapes this step.
     pub(super) wheel_shapes: Vec<Shape>,
@@ -309,17 +311,10 @@ impl<'a, const W: usize> SynthesisSide<'a, W> {
             .unwrap_or(1);
         let (dampers, ports, g_dd) = damper_ports(model, red, &coef, nw);
         let movers = Mover::all(cfg);
-        let observers = observers(
-            model,
-            red,
-            &coef,
-            record,
-            points,
-            &ports[nw..],
-            !movers.is_empty(),
-        );
+        let pads = pads_of(cfg);
+        let shapes = observed_shapes(model, record, points, &pads);
+        let observers = observers(red, &coef, shapes, &ports[nw..], !movers.is_empty());
         let no = observers.len();
-        let n_rail = observers.iter().filter(|o| o.rail_shape.is_some()).count();
         let observer_psi = observers.iter().map(|o| o.psi.clone()).collect();
         let n_steps = cfg.n_steps();
         let lanes = specs
@@ -336,7 +331,7 @@ impl<'a, const W: usize> SynthesisSide<'a, W> {
                     s_inv,
                     setup,
                     readouts: vec![0.0; (n_steps + 1) * no * READOUTS],
-                    residual: vec![0.0; (n_steps + 1) * n_rail],
+                    residual: vec![0.0; (n_steps + 1) * no],
                 }
             })
             .collect();
@@ -354,7 +349,7 @@ impl<'a, const W: usize> SynthesisSide<'a, W> {
             model,
             red,
             observer_psi,
-            n_rail,
+            pads,
             lanes,
             wheel_shapes,
             active: vec![true; ports.len()],
@@ -458,40 +453,56 @@ fn damper_ports(
     (dampers, ports, g_dd)
 }
 
-/// The observers: layer by layer, point by point, with their gains.
-fn observers(
+/// What each observer reads: the layers' records, layer by layer and point by point, then each
+/// pad's upper and lower end, read for velocity: (layer, shape, velocity).
+fn observed_shapes(
     model: &Model,
-    red: &Reduction,
-    coef: &Coefficients,
     record: Record,
     points: &[f64],
+    pads: &[Pad],
+) -> Vec<(usize, Shape, bool)> {
+    let (cfg, st) = (&model.cfg, &model.structure);
+    let layers = record
+        .layers(cfg)
+        .into_iter()
+        .flat_map(|li| points.iter().map(move |&x| (li, x, false)));
+    let ends = pads
+        .iter()
+        .flat_map(|p| [(0, p.x, true), (p.lower, p.x, true)]);
+    layers
+        .chain(ends)
+        .map(|(li, x, velocity)| (li, st.shape(li, x), velocity))
+        .collect()
+}
+
+/// The observers of `shapes` with their gains: each reads Re Σ ψᵀs·Q and Re Σ λ²ψᵀs·Q
+/// (Re Σ λψᵀs·Q when read for velocity).
+fn observers(
+    red: &Reduction,
+    coef: &Coefficients,
+    shapes: Vec<(usize, Shape, bool)>,
     damper_ports: &[CVec],
     movers: bool,
 ) -> Vec<Observer> {
-    let (cfg, st) = (&model.cfg, &model.structure);
     let n = red.stride;
     let lam = [&coef.lam[0][..], &coef.lam[1][..]];
     let zeros = vec![0.0; n];
     let weight = [&coef.w[..], &zeros[..]];
-    let shapes: Vec<(usize, Shape)> = record
-        .layers(cfg)
-        .into_iter()
-        .flat_map(|li| points.iter().map(move |&x| (li, x)))
-        .map(|(li, x)| (li, st.shape(li, x)))
-        .collect();
-    let psis: Vec<CVec> = shapes.iter().map(|(_, s)| project(red, s)).collect();
-    let pairs: Vec<(&Shape, &CVec)> = shapes.iter().map(|(_, s)| s).zip(&psis).collect();
+    let psis: Vec<CVec> = shapes.iter().map(|(_, s, _)| project(red, s)).collect();
+    let pairs: Vec<(&Shape, &CVec)> = shapes.iter().map(|(_, s, _)| s).zip(&psis).collect();
     let gains = red.gains(&pairs);
     let mut observers = Vec::with_capacity(shapes.len());
-    for (((li, s), psi), gains) in shapes.into_iter().zip(psis).zip(gains) {
+    for (((li, s, velocity), psi), gains) in shapes.into_iter().zip(psis).zip(gains) {
         let mut pw = CVec::zeros(n);
         pw.set_mul(weight, psi.parts());
         let mut plw = CVec::zeros(n);
         plw.set_mul(lam, pw.parts());
         let mut l2 = CVec::zeros(n);
         l2.set_mul(lam, psi.parts());
-        let l2_copy = l2.clone();
-        l2.set_mul(lam, l2_copy.parts());
+        if !velocity {
+            let l2_copy = l2.clone();
+            l2.set_mul(lam, l2_copy.parts());
+        }
         observers.push(Observer {
             damper_gains: damper_ports
                 .iter()
