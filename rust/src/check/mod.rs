@@ -125,6 +125,32 @@ mod tests {
         assert_eq!(refused_field(&cfg), None);
     }
 
+    /// A car whose rear wheelset stands on the pinned support at x = 0 has not crossed the
+    /// rail's start, though its wheel position rounds to −6.7e-16 m (l_c = 9, l_t = 1.2), and
+    /// the engine puts that wheel's whole load on the rail from t = 0: the run starts in the
+    /// same static state as a car 1 µm further on.
+    #[test]
+    fn a_wheel_on_the_rails_start_at_t0_has_not_crossed_it() {
+        let mut cfg = crate::library::presets::paper();
+        cfg.solver.t_end = Some(0.002);
+        let v = &mut cfg.vehicles[0];
+        (v.l_c, v.l_t) = (9.0, 1.2);
+        v.x_front = 2.0 * (v.l_c + v.l_t);
+        assert!(
+            v.wheel_offsets()[3] < 0.0,
+            "the rounding this test is about"
+        );
+        assert_eq!(refused_field(&cfg), None);
+        let at_zero = crate::engine::simulate(&cfg, &Profile::flat(), None).unwrap();
+        cfg.vehicles[0].x_front += 1e-6;
+        let inside = crate::engine::simulate(&cfg, &Profile::flat(), None).unwrap();
+        let (w0, w1) = (at_zero.wheel_force(3)[0], inside.wheel_force(3)[0]);
+        assert!((w0 - w1).abs() < 1e-6 * w1, "{w0} vs {w1}");
+        // a wheel truly before the start is still refused
+        cfg.vehicles[0].x_front -= 1e-3;
+        assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
+    }
+
     #[test]
     fn a_band_limit_must_lie_below_the_nyquist_frequency() {
         // Δt = 5e-5 s: Nyquist 10 kHz.

@@ -2,6 +2,7 @@
 //! crossing a rail end), the irregularity profile and the treads under them.
 
 use super::*;
+use crate::config::fields::on_interval;
 
 /// Speed, solver and the run's end; returns the time step and the distance travelled.
 pub(super) fn timing(cfg: &Config) -> Result<(f64, f64)> {
@@ -90,18 +91,13 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
         }
         if cfg.solver.edge_ramp == 0.0 && !cfg.solver.edge_step {
             let (a, b) = cfg.extent(0);
-            // The engine's rule (`Structure::edge_share`): a wheel is on the rail for a ≤ x ≤ b.
-            // Where it ends may exceed an end by rounding (t_end = L/v reaches x = L in
-            // n·Δt), which crosses nothing.
-            let on = |x: f64| a <= x && x <= b;
+            // The engine's rule (`Structure::edge_share`): a wheel is on the rail for a ≤ x ≤ b,
+            // give or take the rounding of the ends (a rear wheelset placed on x = 0, or
+            // t_end = L/v reaching x = L in n·Δt), which crosses nothing.
+            let on = |x: f64| on_interval(x, a, b).is_some();
             let crossing = offs.iter().find_map(|&w| {
                 let end = w + travel;
-                let end = if (end - b).abs() <= 1e-9 * b.abs().max(1.0) {
-                    end.min(b)
-                } else {
-                    end
-                };
-                if !on(w) && on(end) || w < a && end > b {
+                if !on(w) && on(end) || w < a && end > b && !on(w) && !on(end) {
                     Some(("start", a))
                 } else if on(w) && !on(end) {
                     Some(("end", b))

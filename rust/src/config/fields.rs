@@ -68,3 +68,22 @@ pub(crate) const STEP_TOL: f64 = 1e-6;
 pub const MAX_ELEMENTS: usize = 200_000;
 /// The widest lockstep group the engines compile (lanes of one model run together).
 pub const MAX_LANES: usize = 8;
+
+/// A position within this (relative to the structure's scale) of a layer's end is at the end:
+/// sums of lengths round (a car's rear wheelset placed on x = 0 lands at −6.7e-16 m).
+const END_TOL: f64 = 1e-9;
+
+/// `x` on the interval [a, b] with the ends' rounding tolerance: `x` itself inside, the end it
+/// rounds to within the tolerance of an end, `None` outside.
+pub fn on_interval(x: f64, a: f64, b: f64) -> Option<f64> {
+    let tol = END_TOL * a.abs().max(b.abs()).max(1.0);
+    if a <= x && x <= b {
+        Some(x)
+    } else if (x - a).abs() <= tol {
+        Some(a)
+    } else if (x - b).abs() <= tol {
+        Some(b)
+    } else {
+        None
+    }
+}

@@ -2,6 +2,7 @@
 //! stiffness K and damping C = Σ_layers(α_l·M_l + β_l·K_l) + couplings.
 
 use crate::config::DamperParams;
+use crate::config::fields::on_interval;
 use crate::config::{Config, CouplingKind, GROUND, Method};
 use crate::error::Result;
 use crate::linalg::sparse::{Assembler, CsrMatrix};
@@ -195,6 +196,8 @@ impl Structure {
     /// The rail (layer 0) of a hybrid model uses the FE–SEA-corrected cubic functions g̃.
     #[inline]
     pub fn shape_into(&self, layer: usize, x: f64, out: &mut Shape) {
+        // `out` may hold another layer's shape: layers of a modal basis differ in length.
+        out.values.resize(self.layers[layer].basis.shape_len(), 0.0);
         self.layers[layer].shape_into(x, out);
         if layer == 0
             && let Some(fs) = &self.fesea
@@ -233,6 +236,8 @@ impl Structure {
     /// the rigid track beyond taking the rest, so that a wheel joins and leaves the structure
     /// without a step in the rail level under it (docs/zones.md).
     pub fn wheel_shape_into(&self, x: f64, patch: f64, out: &mut Shape) {
+        let (a, b) = self.layers[0].extent();
+        let x = on_interval(x, a, b).unwrap_or(x);
         self.wheel_shape_on_rail(x, patch, out);
         let s = self.edge_share(x);
         if s != 1.0 {
@@ -245,9 +250,9 @@ impl Structure {
     /// last, 1 in between (and everywhere when `edge_ramp` is 0).
     pub fn edge_share(&self, x: f64) -> f64 {
         let (a, b) = self.layers[0].extent();
-        if x < a || x > b {
+        let Some(x) = on_interval(x, a, b) else {
             return 0.0;
-        }
+        };
         let ramp = |d: f64| {
             if d >= self.edge_ramp {
                 1.0
@@ -273,6 +278,8 @@ impl Structure {
     /// the rail and sees s times its deflection.
     pub fn wheel_flexibility(&self, x: f64, patch: f64) -> f64 {
         let l = &self.layers[0];
+        let (a, b) = l.extent();
+        let x = on_interval(x, a, b).unwrap_or(x);
         let s = self.edge_share(x);
         s * s
             * match &l.basis {

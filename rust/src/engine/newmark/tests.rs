@@ -171,3 +171,26 @@ fn treads_need_one_row_per_wheel_on_the_rail_grid() {
         .to_string();
     assert!(e.contains("irregularity.treads[0][7]"), "{e}");
 }
+
+/// Moving forces on the rail and on the girder of the hybrid model, whose layers have different
+/// numbers of modes: each load's shape is its own layer's (a shared buffer once kept the
+/// rail's length for the girder and indexed past the structure's DOFs).
+#[test]
+fn moving_forces_on_layers_of_different_mode_counts() {
+    let mut cfg = presets::paper();
+    cfg.solver.t_end = Some(0.01);
+    cfg.forces = vec![
+        crate::config::MovingForceConfig {
+            magnitude: 5e4,
+            x0: 3.0,
+            layer: None,
+        },
+        crate::config::MovingForceConfig {
+            magnitude: 1e5,
+            x0: 10.0,
+            layer: Some("bridge".into()),
+        },
+    ];
+    let r = simulate(&cfg, &Profile::flat(), None).unwrap();
+    assert!(r.metrics().values().all(|v| v.is_finite()));
+}
