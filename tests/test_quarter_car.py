@@ -82,3 +82,19 @@ def test_a_quarter_car_on_a_girder_matches_an_independent_modal_solution(runs):
     # The result's shapes come from the model: two DOFs, one wheel.
     assert res.vehicle_disp.shape[2] == 2 and res.contact_force.shape[1] == 1
     assert res.config.vehicles[0].dofs == ("Z_c", "Z_w")
+
+
+def test_a_quarter_car_carries_only_its_own_fields():
+    """A quarter car's table has no bogie or pitch fields: a value there is an unknown field,
+    named; a file written when quarter cars held the car's fields at 0 still loads, the zeros
+    dropped with a DeprecationWarning."""
+    cfg = vtb.paper_config()
+    cfg.vehicles = [vtb.Vehicle.quarter_car(11000.0, 1200.0, 1.2e6, 3e4, x_front=3.0)]
+    table = cfg.to_dict()
+    assert table["vehicles"][0]["model"] == "quarter_car" and "l_c" not in table["vehicles"][0]
+    old = dict(table, vehicles=[dict(table["vehicles"][0], j_c=0.0, l_c=0.0, l_t=0.0)])
+    with pytest.warns(DeprecationWarning, match="l_c"):
+        assert vtb.Config.from_dict(old).vehicles == cfg.vehicles
+    bad = dict(table, vehicles=[dict(table["vehicles"][0], l_c=8.0)])
+    with pytest.raises(vtb.ConfigError, match=r"vehicles\[0\]\.l_c"):
+        vtb.Config.from_dict(bad)

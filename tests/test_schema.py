@@ -11,7 +11,7 @@ import pytest
 
 import vtb
 from vtb.config import fields as C
-from vtb.config.schema import SCHEMA, description, properties
+from vtb.config.schema import SCHEMA, description, node, properties
 
 #: Python class → the core struct it serialises to (the two Rayleigh forms are the variants
 #: of one tagged enum).
@@ -21,7 +21,8 @@ PAIRS = [
     (C.Layer, "LayerConfig"),
     (C.Coupling, "CouplingConfig"),
     (C.Discretisation, "DiscretisationConfig"),
-    (C.Vehicle, "VehicleConfig"),
+    (C.Vehicle, "VehicleConfig.car"),
+    (C.QuarterCar, "VehicleConfig.quarter_car"),
     (C.MovingForce, "MovingForceConfig"),
     (C.Solver, "SolverConfig"),
     (C.Output, "OutputConfig"),
@@ -32,8 +33,7 @@ PYTHON_ONLY = {("Config", "irregularity")}
 
 
 def _required(struct):
-    node = SCHEMA if struct == "Config" else SCHEMA["$defs"][struct]
-    return set(node.get("required", []))
+    return set(node(struct).get("required", []))
 
 
 def _resolve(prop):
@@ -132,7 +132,8 @@ def _is_table(prop):
     """A field holding a table (or a list of tables): documented by its own struct's fields."""
     node = prop.get("items", prop)
     ref = node.get("$ref") or next((a["$ref"] for a in node.get("anyOf", []) if "$ref" in a), None)
-    return ref is not None and "properties" in SCHEMA["$defs"][ref.split("/")[-1]]
+    target = SCHEMA["$defs"][ref.split("/")[-1]] if ref else {}
+    return "properties" in target or "oneOf" in target and all("properties" in v for v in target["oneOf"])
 
 
 @pytest.mark.parametrize("cls,struct", PAIRS, ids=[s for _, s in PAIRS])

@@ -29,6 +29,7 @@ from .config.fields import (
     DamperGroup,
     Structure,
     TIDs,
+    QuarterCar,
     Vehicle,
     plausible_ranges,
 )
@@ -56,7 +57,7 @@ from .run.tables import metrics_table, read_parquet, to_parquet
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
-    "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "Irregularity", "IrregularityWarning", "irregularity",
+    "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "QuarterCar", "Irregularity", "IrregularityWarning", "irregularity",
     "ConfigError", "StaleFileError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",

@@ -2,7 +2,7 @@
 //! published tables and a second method. Each test names what it proves.
 
 use faer::Mat;
-use vtb::config::VehicleConfig;
+use vtb::config::{VehicleConfig, VehicleModel};
 use vtb::library::presets::crh3;
 use vtb::model::vehicle::Vehicle;
 
@@ -64,7 +64,9 @@ fn vehicle_eigenfrequencies_match_published_table() {
             );
         }
         // The uncoupled body-mode formulas as a second check of the body modes.
-        let v = crh3(motor, 30.0);
+        let VehicleModel::Car(v) = crh3(motor, 30.0).model else {
+            unreachable!("a car")
+        };
         let k_eq = v.k_s * 2.0 * v.k_p / (v.k_s + 2.0 * v.k_p);
         let f_cb = (2.0 * k_eq / v.m_c).sqrt() / (2.0 * std::f64::consts::PI);
         let f_cp = (2.0 * k_eq * v.l_c * v.l_c / v.j_c).sqrt() / (2.0 * std::f64::consts::PI);

@@ -7,7 +7,7 @@ from ..config import gateway
 from ..config.schema import default
 
 
-def contact_patch_half_length(load: float, wheel_radius: float, rail_crown_radius: float = default("VehicleConfig", "rail_crown_radius")) -> float:
+def contact_patch_half_length(load: float, wheel_radius: float, rail_crown_radius: float = default("VehicleConfig.car", "rail_crown_radius")) -> float:
     """Half-length (m) along the rail of the Hertz contact ellipse of a steel wheel of rolling
     radius ``wheel_radius`` (m) on a steel rail head of crown radius ``rail_crown_radius`` (m)
     under ``load`` (N): the patch a wheel spreads its force over with

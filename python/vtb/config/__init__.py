@@ -12,11 +12,11 @@ the only module of this package that calls the core.
 
 from .fields import (
     Config, Coupling, DamperGroup, Damping, Discretisation, Layer, MovingForce, Output, RayleighCoefficients, RayleighRatio,
-    Solver, Structure, TIDs, Vehicle, check_types, core_dict, plausible_ranges,
+    QuarterCar, Solver, Structure, TIDs, Vehicle, check_types, core_dict, plausible_ranges,
 )
 from .irregularity import Irregularity
 
 __all__ = [
     "Config", "Coupling", "DamperGroup", "Damping", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
-    "RayleighRatio", "Solver", "Structure", "TIDs", "Vehicle", "check_types", "core_dict", "plausible_ranges", "Irregularity",
+    "RayleighRatio", "QuarterCar", "Solver", "Structure", "TIDs", "Vehicle", "check_types", "core_dict", "plausible_ranges", "Irregularity",
 ]

@@ -20,6 +20,7 @@ import json
 import math
 import sys
 import typing
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
@@ -135,14 +136,27 @@ class Discretisation(StrictFields):
     synthesis_cutoff: Optional[float] = _default("DiscretisationConfig", "synthesis_cutoff")
 
 
-@documented("VehicleConfig")
+class _Wheeled:
+    """What every vehicle model's class shares: its layout in a run's records."""
+
+    @property
+    def dofs(self) -> tuple:
+        """Names of the model's DOFs, in the order of ``Result.vehicle_disp``."""
+        return tuple(gateway.vehicle_models()[self.model][0])
+
+    @property
+    def n_wheels(self) -> int:
+        """Wheels of the model (the columns of ``Result.contact_force`` per vehicle)."""
+        return gateway.vehicle_models()[self.model][1]
+
+
+@documented("VehicleConfig.car")
 @dataclass
-class Vehicle(StrictFields):
-    """A vehicle (docs/vehicles.md). ``model="car"``: Zhai's 10-DOF car, secondary suspension
-    per bogie, primary per wheelset (both sides lumped). ``model="quarter_car"``: a sprung mass
-    ``m_c`` on ``k_p`` ∥ ``c_p`` over one wheel ``m_w`` (build it with :meth:`quarter_car`).
-    The modelled top layer is one of ``rails`` identical rails, so it carries 1/``rails`` of
-    every axle load."""
+class Vehicle(_Wheeled, StrictFields):
+    """Zhai's 10-DOF car (docs/vehicles.md): secondary suspension per bogie, primary per
+    wheelset (both sides lumped). The modelled top layer is one of ``rails`` identical rails,
+    so it carries 1/``rails`` of every axle load. A quarter car is :class:`QuarterCar`
+    (:meth:`quarter_car` builds one)."""
 
     m_c: float
     j_c: float
@@ -157,36 +171,53 @@ class Vehicle(StrictFields):
     l_t: float
     wheel_radius: float
     x_front: float
-    contact_constant: Optional[float] = _default("VehicleConfig", "contact_constant")
-    rails: int = _default("VehicleConfig", "rails")
-    contact_patch: bool = _default("VehicleConfig", "contact_patch")
-    rail_crown_radius: float = _default("VehicleConfig", "rail_crown_radius")
-    model: Literal["car", "quarter_car"] = _default("VehicleConfig", "model")
+    contact_constant: Optional[float] = _default("VehicleConfig.car", "contact_constant")
+    rails: int = _default("VehicleConfig.car", "rails")
+    contact_patch: bool = _default("VehicleConfig.car", "contact_patch")
+    rail_crown_radius: float = _default("VehicleConfig.car", "rail_crown_radius")
+    model: Literal["car"] = _default("VehicleConfig.car", "model")
 
-    @classmethod
-    def quarter_car(cls, sprung_mass: float, wheel_mass: float, stiffness: float, damping: float,
-                    x_front: float, wheel_radius: float = 0.46, **kw) -> "Vehicle":
+    @staticmethod
+    def quarter_car(sprung_mass: float, wheel_mass: float, stiffness: float, damping: float,
+                    x_front: float, wheel_radius: float = 0.46, **kw) -> "QuarterCar":
         """A quarter car: ``sprung_mass`` (kg) on a spring ``stiffness`` (N/m) ∥ dashpot
         ``damping`` (N·s/m) over one wheel of ``wheel_mass`` (kg) at ``x_front`` (m) at t = 0;
         ``kw`` sets the contact fields (``rails``, ``contact_patch``, ...)."""
-        zero = dict.fromkeys(("j_c", "m_t", "j_t", "k_s", "c_s", "l_c", "l_t"), 0.0)
-        return cls(m_c=sprung_mass, m_w=wheel_mass, k_p=stiffness, c_p=damping, x_front=x_front,
-                   wheel_radius=wheel_radius, model="quarter_car", **zero, **kw)
-
-    @property
-    def dofs(self) -> tuple:
-        """Names of the model's DOFs, in the order of ``Result.vehicle_disp``."""
-        return tuple(gateway.vehicle_models()[self.model][0])
-
-    @property
-    def n_wheels(self) -> int:
-        """Wheels of the model (the columns of ``Result.contact_force`` per vehicle)."""
-        return gateway.vehicle_models()[self.model][1]
+        return QuarterCar(m_c=sprung_mass, m_w=wheel_mass, k_p=stiffness, c_p=damping, x_front=x_front,
+                          wheel_radius=wheel_radius, **kw)
 
     @property
     def length(self) -> float:
         """Distance from the leading to the trailing wheel (m)."""
         return 2.0 * (self.l_c + self.l_t)
+
+
+@documented("VehicleConfig.quarter_car")
+@dataclass
+class QuarterCar(_Wheeled, StrictFields):
+    """A quarter car (docs/vehicles.md): a sprung mass ``m_c`` on ``k_p`` ∥ ``c_p`` over one
+    wheel ``m_w``."""
+
+    m_c: float
+    m_w: float
+    k_p: float
+    c_p: float
+    wheel_radius: float
+    x_front: float
+    contact_constant: Optional[float] = _default("VehicleConfig.quarter_car", "contact_constant")
+    rails: int = _default("VehicleConfig.quarter_car", "rails")
+    contact_patch: bool = _default("VehicleConfig.quarter_car", "contact_patch")
+    rail_crown_radius: float = _default("VehicleConfig.quarter_car", "rail_crown_radius")
+    model: Literal["quarter_car"] = "quarter_car"
+
+    @property
+    def length(self) -> float:
+        """Distance from the leading to the trailing wheel (m): one wheel."""
+        return 0.0
+
+
+#: The class of each vehicle model, by its ``model`` tag.
+VEHICLE_MODELS = {"car": Vehicle, "quarter_car": QuarterCar}
 
 
 @documented("MovingForceConfig")
@@ -473,7 +504,28 @@ def to_plain(obj):
     return obj
 
 
-_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): Vehicle, ("Config", "forces"): MovingForce, ("Config", "dampers"): DamperGroup, ("Irregularity", "parts"): Irregularity}
+_LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): tuple(VEHICLE_MODELS.values()), ("Config", "forces"): MovingForce, ("Config", "dampers"): DamperGroup, ("Irregularity", "parts"): Irregularity}
+
+#: The car's own fields, which a quarter car written by vtb before the tagged vehicles held at 0.
+_CAR_ONLY = ("j_c", "m_t", "j_t", "k_s", "c_s", "l_c", "l_t")
+
+
+def _vehicle_table(data, path: str) -> tuple:
+    """The class of a vehicle table by its ``model`` tag (``"car"`` when absent), and the table.
+    A quarter car written before each model carried only its own fields has the car's at 0:
+    they are dropped with a :class:`DeprecationWarning`."""
+    if not isinstance(data, dict):
+        return Vehicle, data
+    model = data.get("model", "car")
+    cls = VEHICLE_MODELS.get(model) if isinstance(model, str) else None
+    if cls is None:
+        raise config_error(f"{path}.model", model, f"must be one of {list(VEHICLE_MODELS)}")
+    zeros = [k for k in _CAR_ONLY if cls is QuarterCar and data.get(k) == 0]
+    if zeros:
+        warnings.warn(f"{path}: a quarter car carries only its own fields; dropped the car's {', '.join(zeros)} "
+                      "(all 0): remove them from the file", DeprecationWarning, stacklevel=4)
+        data = {k: v for k, v in data.items() if k not in zeros}
+    return cls, data
 
 
 def _from_plain(cls, data, path: str):
@@ -500,7 +552,8 @@ def _from_plain(cls, data, path: str):
         if item is not None:
             if not isinstance(v, (list, tuple)):
                 raise config_error(sub, v, "expected a list")
-            kwargs[f.name] = [_from_plain(item, x, f"{sub}[{i}]") for i, x in enumerate(v)]
+            kwargs[f.name] = [_from_plain(*(_vehicle_table(x, f"{sub}[{i}]") if isinstance(item, tuple) else (item, x)), f"{sub}[{i}]")
+                              for i, x in enumerate(v)]
         elif f.name == "damping" and cls is Layer:
             kwargs[f.name] = _damping_from_plain(v, sub)
         else:
@@ -546,7 +599,8 @@ def check_types(obj, path: str = "") -> None:
                     raise config_error(sub, v, "expected a list")
                 for i, x in enumerate(v):
                     if not isinstance(x, item):
-                        raise config_error(f"{sub}[{i}]", x, f"expected a {item.__name__}")
+                        names = " or ".join(c.__name__ for c in (item if isinstance(item, tuple) else (item,)))
+                        raise config_error(f"{sub}[{i}]", x, f"expected a {names}")
                     check_types(x, f"{sub}[{i}]")
             else:
                 _check_value(v, hints[f.name], sub)

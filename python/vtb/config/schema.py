@@ -17,9 +17,19 @@ from ..errors import config_error
 SCHEMA: dict = gateway.schema()
 
 
+def node(struct: str) -> dict:
+    """The schema of a core struct (``"Config"`` is the root); ``"Enum.variant"`` is the table
+    of one variant of a tagged enum of tables (``"VehicleConfig.quarter_car"``)."""
+    if struct == "Config":
+        return SCHEMA
+    name, _, variant = struct.partition(".")
+    n = SCHEMA["$defs"][name]
+    return next(v for v in n["oneOf"] if v.get("title") == variant) if variant else n
+
+
 def properties(struct: str) -> dict:
-    """The schema properties of a core struct (``"Config"`` is the root)."""
-    return SCHEMA["properties"] if struct == "Config" else SCHEMA["$defs"][struct]["properties"]
+    """The schema properties of a core struct (see :func:`node`)."""
+    return node(struct)["properties"]
 
 
 def default(struct: str, name: str) -> Any:

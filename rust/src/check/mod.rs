@@ -111,7 +111,7 @@ mod tests {
     fn a_wheel_crossing_a_rail_end_needs_the_hand_over_set() {
         // The article car started 5 m before the rail: its wheels cross x = 0 at 80 m/s.
         let mut cfg = crate::library::presets::paper();
-        cfg.vehicles[0].x_front = -5.0;
+        cfg.vehicles[0].wheels.x_front = -5.0;
         assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
         cfg.solver.edge_step = true; // the step, on request (the hybrid takes no ramp)
         assert_eq!(refused_field(&cfg), None);
@@ -120,7 +120,7 @@ mod tests {
         // Wheels that stay off the rail for the whole run need nothing.
         cfg.solver.edge_step = false;
         cfg.solver.edge_ramp = 0.0;
-        cfg.vehicles[0].x_front = -500.0;
+        cfg.vehicles[0].wheels.x_front = -500.0;
         cfg.solver.t_end = Some(0.1);
         assert_eq!(refused_field(&cfg), None);
     }
@@ -134,20 +134,23 @@ mod tests {
         let mut cfg = crate::library::presets::paper();
         cfg.solver.t_end = Some(0.002);
         let v = &mut cfg.vehicles[0];
-        (v.l_c, v.l_t) = (9.0, 1.2);
-        v.x_front = 2.0 * (v.l_c + v.l_t);
+        let crate::config::VehicleModel::Car(car) = &mut v.model else {
+            unreachable!("the article's car")
+        };
+        (car.l_c, car.l_t) = (9.0, 1.2);
+        v.wheels.x_front = 2.0 * (car.l_c + car.l_t);
         assert!(
             v.wheel_offsets()[3] < 0.0,
             "the rounding this test is about"
         );
         assert_eq!(refused_field(&cfg), None);
         let at_zero = crate::engine::simulate(&cfg, &Profile::flat(), None).unwrap();
-        cfg.vehicles[0].x_front += 1e-6;
+        cfg.vehicles[0].wheels.x_front += 1e-6;
         let inside = crate::engine::simulate(&cfg, &Profile::flat(), None).unwrap();
         let (w0, w1) = (at_zero.wheel_force(3)[0], inside.wheel_force(3)[0]);
         assert!((w0 - w1).abs() < 1e-6 * w1, "{w0} vs {w1}");
         // a wheel truly before the start is still refused
-        cfg.vehicles[0].x_front -= 1e-3;
+        cfg.vehicles[0].wheels.x_front -= 1e-3;
         assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[0].x_front"));
     }
 
@@ -175,7 +178,7 @@ mod tests {
     #[test]
     fn a_contact_patch_needs_a_finite_element_rail() {
         let mut cfg = crate::library::presets::paper();
-        cfg.vehicles[0].contact_patch = true;
+        cfg.vehicles[0].wheels.contact_patch = true;
         assert_eq!(
             refused_field(&cfg).as_deref(),
             Some("vehicles[0].contact_patch")
@@ -185,7 +188,7 @@ mod tests {
             None
         );
         cfg.discretisation.method = Method::Fem;
-        cfg.vehicles[0].rail_crown_radius = 0.0;
+        cfg.vehicles[0].wheels.rail_crown_radius = 0.0;
         assert_eq!(
             refused_field(&cfg).as_deref(),
             Some("vehicles[0].rail_crown_radius")

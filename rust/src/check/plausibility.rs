@@ -48,8 +48,12 @@ fn couplings(
         .collect()
 }
 
-fn vehicles(c: &Config, f: fn(&crate::config::VehicleConfig) -> f64) -> Vec<f64> {
-    c.vehicles.iter().map(f).collect()
+/// Every vehicle's model field `name` (NaN, skipped, where its model has no such field).
+fn vehicles(c: &Config, name: &str) -> Vec<f64> {
+    c.vehicles
+        .iter()
+        .map(|v| v.model.field(name).unwrap_or(f64::NAN))
+        .collect()
 }
 
 fn tids(c: &Config, f: fn(&crate::config::DamperGroup) -> f64) -> Vec<f64> {
@@ -156,7 +160,7 @@ pub const RANGES: &[Range] = &[
         max: 2e5,
         unit: "kg",
         covers: "a light car body to a loaded freight wagon",
-        get: |c| vehicles(c, |v| v.m_c),
+        get: |c| vehicles(c, "m_c"),
     },
     Range {
         field: "vehicles[*].j_c",
@@ -164,7 +168,7 @@ pub const RANGES: &[Range] = &[
         max: 1e8,
         unit: "kg·m²",
         covers: "car-body pitch inertia",
-        get: |c| vehicles(c, |v| v.j_c),
+        get: |c| vehicles(c, "j_c"),
     },
     Range {
         field: "vehicles[*].m_t",
@@ -172,7 +176,7 @@ pub const RANGES: &[Range] = &[
         max: 2e4,
         unit: "kg",
         covers: "bogie frames",
-        get: |c| vehicles(c, |v| v.m_t),
+        get: |c| vehicles(c, "m_t"),
     },
     Range {
         field: "vehicles[*].m_w",
@@ -180,7 +184,7 @@ pub const RANGES: &[Range] = &[
         max: 1e4,
         unit: "kg",
         covers: "wheelsets",
-        get: |c| vehicles(c, |v| v.m_w),
+        get: |c| vehicles(c, "m_w"),
     },
     Range {
         field: "vehicles[*].k_s",
@@ -188,7 +192,7 @@ pub const RANGES: &[Range] = &[
         max: 1e8,
         unit: "N/m",
         covers: "secondary suspensions",
-        get: |c| vehicles(c, |v| v.k_s),
+        get: |c| vehicles(c, "k_s"),
     },
     Range {
         field: "vehicles[*].k_p",
@@ -196,7 +200,7 @@ pub const RANGES: &[Range] = &[
         max: 1e9,
         unit: "N/m",
         covers: "primary suspensions",
-        get: |c| vehicles(c, |v| v.k_p),
+        get: |c| vehicles(c, "k_p"),
     },
     Range {
         field: "vehicles[*].j_t",
@@ -204,7 +208,7 @@ pub const RANGES: &[Range] = &[
         max: 5e4,
         unit: "kg·m²",
         covers: "bogie pitch inertia",
-        get: |c| vehicles(c, |v| v.j_t),
+        get: |c| vehicles(c, "j_t"),
     },
     Range {
         field: "vehicles[*].c_s",
@@ -212,7 +216,7 @@ pub const RANGES: &[Range] = &[
         max: 1e6,
         unit: "N·s/m",
         covers: "secondary dampers",
-        get: |c| vehicles(c, |v| v.c_s),
+        get: |c| vehicles(c, "c_s"),
     },
     Range {
         field: "vehicles[*].c_p",
@@ -220,7 +224,7 @@ pub const RANGES: &[Range] = &[
         max: 1e6,
         unit: "N·s/m",
         covers: "primary dampers",
-        get: |c| vehicles(c, |v| v.c_p),
+        get: |c| vehicles(c, "c_p"),
     },
     Range {
         field: "vehicles[*].l_c",
@@ -228,7 +232,7 @@ pub const RANGES: &[Range] = &[
         max: 15.0,
         unit: "m",
         covers: "half the distance between bogie centres",
-        get: |c| vehicles(c, |v| v.l_c),
+        get: |c| vehicles(c, "l_c"),
     },
     Range {
         field: "vehicles[*].l_t",
@@ -236,7 +240,7 @@ pub const RANGES: &[Range] = &[
         max: 2.5,
         unit: "m",
         covers: "half bogie wheelbases",
-        get: |c| vehicles(c, |v| v.l_t),
+        get: |c| vehicles(c, "l_t"),
     },
     Range {
         field: "vehicles[*].wheel_radius",
@@ -244,7 +248,7 @@ pub const RANGES: &[Range] = &[
         max: 0.8,
         unit: "m",
         covers: "wheels",
-        get: |c| vehicles(c, |v| v.wheel_radius),
+        get: |c| c.vehicles.iter().map(|v| v.wheels.wheel_radius).collect(),
     },
     Range {
         field: "tids.inertance",

@@ -50,20 +50,20 @@ pub(super) fn timing(cfg: &Config) -> Result<(f64, f64)> {
 pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> {
     for (i, v) in cfg.vehicles.iter().enumerate() {
         let p = format!("vehicles[{i}]");
-        crate::model::vehicle::model_of(v).validate(&p)?;
         v.validate(&p)?;
         // The engines and the records hold one vehicle model per run.
-        if v.model != cfg.vehicles[0].model {
+        let (kind, first) = (v.model.kind(), cfg.vehicles[0].model.kind());
+        if kind != first {
             return Err(VtbError::config(
                 format!("{p}.model"),
-                v.model.name(),
+                kind.name(),
                 format!(
                     "every vehicle of a run is of one model; vehicles[0] is a {:?}",
-                    cfg.vehicles[0].model.name()
+                    first.name()
                 ),
             ));
         }
-        if v.contact_patch && cfg.discretisation.method != Method::Fem {
+        if v.wheels.contact_patch && cfg.discretisation.method != Method::Fem {
             return Err(VtbError::config(
                 format!("{p}.contact_patch"),
                 true,
@@ -113,7 +113,7 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
                 };
                 return Err(VtbError::config(
                     format!("{p}.x_front"),
-                    v.x_front,
+                    v.wheels.x_front,
                     format!(
                         "a wheel of this vehicle crosses the rail's {which} at x = {x} m during the run{tail}, \
                          where it would meet the track's static deflection as a step (a spurious impact): model \

@@ -23,7 +23,10 @@ pub use structure::{
     CouplingConfig, CouplingKind, GROUND, LayerConfig, RayleighConfig, StructureConfig,
 };
 pub(crate) use vehicle::default_rail_crown_radius;
-pub use vehicle::{MovingForceConfig, VehicleConfig, VehicleKind};
+pub use vehicle::{
+    CarConfig, MovingForceConfig, QuarterCarConfig, VehicleConfig, VehicleKind, VehicleModel,
+    Wheels,
+};
 
 use crate::error::{Result, VtbError};
 use schemars::JsonSchema;
@@ -73,18 +76,28 @@ impl Config {
         let tree: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| VtbError::config("<json>", "(text)", e.to_string()))?;
         serde_path_to_error::deserialize(&tree).map_err(|e| {
-            let reason = e.inner().to_string();
+            let mut reason = e.inner().to_string();
             let mut path = e.path().to_string();
+            let join = |path: &str, name: &str| {
+                if path == "." {
+                    name.to_string()
+                } else {
+                    format!("{path}.{name}")
+                }
+            };
+            // A table read by hand (a vehicle) names the field inside it: `at `f`: …`.
+            if let Some((inner, rest)) = reason
+                .strip_prefix("at `")
+                .and_then(|r| r.split_once("`: "))
+            {
+                (path, reason) = (join(&path, inner), rest.to_string());
+            }
             // An unknown field is reported at its parent: name the field itself.
             if let Some(name) = reason
                 .strip_prefix("unknown field `")
                 .and_then(|r| r.split('`').next())
             {
-                path = if path == "." {
-                    name.to_string()
-                } else {
-                    format!("{path}.{name}")
-                };
+                path = join(&path, name);
             }
             let value =
                 value_at(&tree, &path).map_or_else(|| "(missing)".to_string(), |v| v.to_string());

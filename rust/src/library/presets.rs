@@ -12,24 +12,27 @@ pub fn crh3(motor: bool, x_front: f64) -> VehicleConfig {
         (4.4e4, 2.4e3, 2.2e3, 6.0e5, 8.0e4, 1.4e6, 8.0e4)
     };
     VehicleConfig {
-        m_c,
-        j_c: 2.7e6,
-        m_t,
-        j_t,
-        m_w: 2.4e3,
-        k_s,
-        c_s,
-        k_p,
-        c_p,
-        l_c: 8.6875,
-        l_t: 1.25,
-        wheel_radius: 0.46,
-        contact_constant: None,
-        x_front,
-        rails: 2,
-        contact_patch: false,
-        rail_crown_radius: crate::config::default_rail_crown_radius(),
-        model: crate::config::VehicleKind::Car,
+        model: VehicleModel::Car(CarConfig {
+            m_c,
+            j_c: 2.7e6,
+            m_t,
+            j_t,
+            m_w: 2.4e3,
+            k_s,
+            c_s,
+            k_p,
+            c_p,
+            l_c: 8.6875,
+            l_t: 1.25,
+        }),
+        wheels: Wheels {
+            wheel_radius: 0.46,
+            contact_constant: None,
+            x_front,
+            rails: 2,
+            contact_patch: false,
+            rail_crown_radius: crate::config::default_rail_crown_radius(),
+        },
     }
 }
 
@@ -152,7 +155,8 @@ pub fn table1_structure() -> StructureConfig {
 /// its 0.01–1 m band at 80 m/s, 2π·80/sqrt(0.01·1) rad/s (800 Hz).
 pub fn paper() -> Config {
     let car = crh3(false, 0.0);
-    let x_front = 1.0 + 2.0 * (car.l_c + car.l_t);
+    // The rear wheelset 1 m onto the bridge: the front one the car's length further on.
+    let x_front = 1.0 + (car.wheel_offsets()[0] - car.wheel_offsets()[3]);
     Config {
         structure: table1_structure(),
         discretisation: DiscretisationConfig {
@@ -207,7 +211,7 @@ pub const CONVERGED_BAND_LIMIT: f64 = 2000.0;
 pub fn paper_converged() -> Config {
     let mut cfg = paper();
     for v in cfg.vehicles.iter_mut() {
-        v.contact_patch = true;
+        v.wheels.contact_patch = true;
     }
     cfg.output.band_limit = Some(CONVERGED_BAND_LIMIT);
     cfg.discretisation.method = Method::Fem;

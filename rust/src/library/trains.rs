@@ -2,7 +2,7 @@
 //! that place them one behind the other. The Python layer's `vtb.train` builds a run's
 //! vehicles from here, so every number lives in one place.
 
-use crate::config::VehicleConfig;
+use crate::config::{CarConfig, VehicleConfig, VehicleModel};
 use crate::library::presets::crh3;
 use serde::Serialize;
 
@@ -23,7 +23,8 @@ pub struct TrainCar {
 impl TrainCar {
     /// Length over the car body (m).
     pub fn length(&self) -> f64 {
-        self.front_overhang + 2.0 * (self.vehicle.l_c + self.vehicle.l_t) + self.rear_overhang
+        let c = car_of(&self.vehicle);
+        self.front_overhang + 2.0 * (c.l_c + c.l_t) + self.rear_overhang
     }
 }
 
@@ -42,11 +43,20 @@ pub struct TrainSpec {
 const VELARO_INNER_END: f64 = 3.70;
 const VELARO_NOSE_END: f64 = 4.76;
 
+/// The car parameters of a library vehicle (every one of them is a car).
+fn car_of(v: &VehicleConfig) -> &CarConfig {
+    match &v.model {
+        VehicleModel::Car(c) => c,
+        VehicleModel::QuarterCar(_) => unreachable!("the library holds cars"),
+    }
+}
+
 fn car(role: &'static str, vehicle: VehicleConfig, front_end: f64, rear_end: f64) -> TrainCar {
     // The overhangs run from the body ends to the outer wheelsets, l_t inside the bogie centres.
+    let l_t = car_of(&vehicle).l_t;
     TrainCar {
-        front_overhang: front_end - vehicle.l_t,
-        rear_overhang: rear_end - vehicle.l_t,
+        front_overhang: front_end - l_t,
+        rear_overhang: rear_end - l_t,
         role,
         vehicle,
     }
@@ -99,17 +109,21 @@ fn velaro_e_car(middle: bool) -> VehicleConfig {
     } else {
         (47_800.0, 1_957_888.0, 1_715.0)
     };
+    let base = crh3(false, 0.0);
     VehicleConfig {
-        m_c,
-        j_c,
-        m_t: 3_500.0,
-        j_t,
-        m_w: 1_800.0,
-        k_s: 2.0 * 350e3,
-        c_s: 2.0 * 20e3,
-        k_p: 2.0 * 1.2e6,
-        c_p: 2.0 * 10e3,
-        ..crh3(false, 0.0)
+        model: VehicleModel::Car(CarConfig {
+            m_c,
+            j_c,
+            m_t: 3_500.0,
+            j_t,
+            m_w: 1_800.0,
+            k_s: 2.0 * 350e3,
+            c_s: 2.0 * 20e3,
+            k_p: 2.0 * 1.2e6,
+            c_p: 2.0 * 10e3,
+            ..car_of(&base).clone()
+        }),
+        ..base
     }
 }
 
@@ -163,7 +177,8 @@ mod tests {
     /// (physics data for the Velaro, set B).
     #[test]
     fn velaro_axle_load() {
-        let v = velaro_e_car(false);
+        let car = velaro_e_car(false);
+        let v = car_of(&car);
         let axle = (v.m_c + 2.0 * v.m_t + 4.0 * v.m_w) * 9.81 / 4.0;
         assert!((axle - 152.1e3).abs() < 0.1e3, "{axle}");
     }

@@ -455,7 +455,7 @@ mod tests {
     fn a_train_has_indices_per_car_and_per_wheel() {
         let mut cfg = crate::library::presets::paper();
         let mut second = cfg.vehicles[0].clone();
-        second.x_front += 25.0;
+        second.wheels.x_front += 25.0;
         cfg.vehicles.push(second);
         cfg.output.points = vec![40.0, 80.0];
         cfg.output.pad_forces = true;

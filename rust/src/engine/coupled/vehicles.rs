@@ -192,7 +192,7 @@ impl<const W: usize> Vehicles<W> {
             .iter()
             .enumerate()
             .map(|(wi, &load)| {
-                let v = &cfg.vehicles[wi / wpc];
+                let v = &cfg.vehicles[wi / wpc].wheels;
                 if v.contact_patch {
                     patch_half_length(load, v.wheel_radius, v.rail_crown_radius)
                 } else {

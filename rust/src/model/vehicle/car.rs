@@ -6,9 +6,7 @@
 //! (e.g. F_s1 = K_s(Z_c − l_c·β_c − Z_t1)).
 
 use super::{Dof, Element, VehicleModel};
-use crate::config::VehicleConfig;
-use crate::config::fields::{non_negative, positive};
-use crate::error::{Result, VtbError};
+use crate::config::CarConfig;
 
 /// Index of the first wheelset DOF.
 const WHEEL0: usize = 6;
@@ -57,7 +55,7 @@ const DOFS: &[Dof] = &[
 ];
 
 /// The 10-DOF car of a vehicle configuration.
-pub struct ZhaiCar<'a>(pub &'a VehicleConfig);
+pub struct ZhaiCar<'a>(pub &'a CarConfig);
 
 impl VehicleModel for ZhaiCar<'_> {
     fn dofs(&self) -> &'static [Dof] {
@@ -103,69 +101,34 @@ impl VehicleModel for ZhaiCar<'_> {
     fn wheel_dofs(&self) -> Vec<usize> {
         (WHEEL0..WHEEL0 + 4).collect()
     }
-
-    fn validate(&self, p: &str) -> Result<()> {
-        let v = self.0;
-        for (name, val) in [
-            ("m_c", v.m_c),
-            ("j_c", v.j_c),
-            ("m_t", v.m_t),
-            ("j_t", v.j_t),
-            ("m_w", v.m_w),
-            ("k_s", v.k_s),
-            ("k_p", v.k_p),
-            ("l_c", v.l_c),
-            ("l_t", v.l_t),
-        ] {
-            positive(&format!("{p}.{name}"), val)?;
-        }
-        non_negative(&format!("{p}.c_s"), v.c_s)?;
-        non_negative(&format!("{p}.c_p"), v.c_p)?;
-        if v.l_t >= v.l_c {
-            return Err(VtbError::config(
-                format!("{p}.l_t"),
-                v.l_t,
-                format!("half wheelbase must be smaller than l_c = {}", v.l_c),
-            ));
-        }
-        Ok(())
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::VehicleConfig;
     use crate::model::vehicle::Vehicle;
 
     const N_DOF: usize = 10;
 
     pub fn set_a_trailer() -> VehicleConfig {
-        VehicleConfig {
-            m_c: 4.4e4,
-            j_c: 2.7e6,
-            m_t: 2.4e3,
-            j_t: 2.2e3,
-            m_w: 2.4e3,
-            k_s: 6.0e5,
-            c_s: 8.0e4,
-            k_p: 1.4e6,
-            c_p: 8.0e4,
-            l_c: 8.6875,
-            l_t: 1.25,
-            wheel_radius: 0.46,
-            contact_constant: None,
-            x_front: 30.0,
-            rails: 2,
-            contact_patch: false,
-            rail_crown_radius: crate::config::default_rail_crown_radius(),
-            model: crate::model::vehicle::VehicleKind::Car,
+        let mut v = crate::library::presets::crh3(false, 30.0);
+        v.wheels.contact_constant = None;
+        v
+    }
+
+    fn params(v: &VehicleConfig) -> &CarConfig {
+        match &v.model {
+            crate::config::VehicleModel::Car(c) => c,
+            _ => unreachable!("a car"),
         }
     }
 
     #[test]
     fn stiffness_is_symmetric_and_forces_match_model_md() {
-        let v = set_a_trailer();
-        let car = Vehicle::new(&v);
+        let cfg = set_a_trailer();
+        let car = Vehicle::new(&cfg);
+        let v = params(&cfg);
         for i in 0..N_DOF {
             for j in 0..N_DOF {
                 assert_eq!(car.k[i * N_DOF + j], car.k[j * N_DOF + i]);
@@ -204,8 +167,9 @@ mod tests {
 
     #[test]
     fn static_wheel_loads_follow_from_statics() {
-        let v = set_a_trailer();
-        let car = Vehicle::new(&v);
+        let cfg = set_a_trailer();
+        let car = Vehicle::new(&cfg);
+        let v = params(&cfg);
         let g = 9.81;
         let (p, _) = car.static_state(g, &[1e-4, -2e-4, 3e-4, 0.0]);
         let want = v.m_w * g + 0.5 * v.m_t * g + 0.25 * v.m_c * g;

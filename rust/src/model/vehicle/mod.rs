@@ -10,25 +10,31 @@ pub use car::ZhaiCar;
 pub use quarter_car::QuarterCar;
 
 use crate::config::{VehicleConfig, VehicleKind};
-use crate::error::Result;
 
 /// The model a vehicle configuration describes, built from its fields.
 pub fn model_of(v: &VehicleConfig) -> Box<dyn VehicleModel + '_> {
-    match v.model {
-        VehicleKind::Car => Box::new(ZhaiCar(v)),
-        VehicleKind::QuarterCar => Box::new(QuarterCar(v)),
+    match &v.model {
+        crate::config::VehicleModel::Car(c) => Box::new(ZhaiCar(c)),
+        crate::config::VehicleModel::QuarterCar(q) => Box::new(QuarterCar(q)),
     }
 }
 
 /// The DOF names (state order) and the wheel count of a kind: they do not depend on the
 /// values, so they are read off a model with every field 0.
 pub fn layout(kind: VehicleKind) -> (Vec<&'static str>, usize) {
-    let mut v: VehicleConfig = serde_json::from_value(serde_json::json!({
-        "m_c": 0, "j_c": 0, "m_t": 0, "j_t": 0, "m_w": 0, "k_s": 0, "c_s": 0, "k_p": 0,
-        "c_p": 0, "l_c": 0, "l_t": 0, "wheel_radius": 0, "x_front": 0,
-    }))
-    .expect("a vehicle with every field 0 deserialises");
-    v.model = kind;
+    let zeros = match kind {
+        VehicleKind::Car => serde_json::json!({
+            "m_c": 0, "j_c": 0, "m_t": 0, "j_t": 0, "m_w": 0, "k_s": 0, "c_s": 0, "k_p": 0,
+            "c_p": 0, "l_c": 0, "l_t": 0,
+        }),
+        VehicleKind::QuarterCar => serde_json::json!({"m_c": 0, "m_w": 0, "k_p": 0, "c_p": 0}),
+    };
+    let mut table = zeros.as_object().expect("a table").clone();
+    table.insert("model".into(), kind.name().into());
+    table.insert("wheel_radius".into(), 0.into());
+    table.insert("x_front".into(), 0.into());
+    let v: VehicleConfig =
+        serde_json::from_value(table.into()).expect("a vehicle with every field 0 deserialises");
     let m = model_of(&v);
     (
         m.dofs().iter().map(|d| d.name).collect(),
@@ -62,9 +68,6 @@ pub trait VehicleModel {
     fn elements(&self) -> Vec<Element>;
     /// The DOF of each wheel in contact, front to rear.
     fn wheel_dofs(&self) -> Vec<usize>;
-    /// Checks the fields this model reads (and that it leaves the others at 0); `p` is the
-    /// vehicle's path in the configuration.
-    fn validate(&self, p: &str) -> Result<()>;
 }
 
 /// The largest number of wheels of one vehicle: the engines' port block width
@@ -113,7 +116,7 @@ impl Vehicle {
             wheel_dofs: model.wheel_dofs(),
             hertz_g: v.hertz_constant(),
             wheel_x0: v.wheel_offsets(),
-            rails: v.rails as f64,
+            rails: v.wheels.rails as f64,
         }
     }
 
