@@ -96,6 +96,7 @@ impl Config {
             if let Some(name) = reason
                 .strip_prefix("unknown field `")
                 .and_then(|r| r.split('`').next())
+                .filter(|name| !path.ends_with(&format!(".{name}")))
             {
                 path = join(&path, name);
             }
