@@ -4,7 +4,8 @@
 //!
 //! - `mod.rs` (this file): the set-up and the state at t = 0;
 //! - `step`: the step's phases — loads, ports, the contact's compliance, the update, records;
-//! - `correction`: the FE–SEA correction's force terms and output recovery (hybrid rails).
+//! - `correction`: the FE–SEA correction's set-up, force terms and output recovery (hybrid
+//!   rails).
 
 mod correction;
 mod step;
@@ -172,44 +173,11 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             .map(|l| l.basis.shape_len())
             .max()
             .unwrap_or(0);
-        let rail_movers: Vec<(f64, f64)> = movers
-            .iter()
-            .filter(|m: &&Mover| m.layer == 0)
-            .map(|m| (m.x0, m.magnitude))
-            .collect();
-        let correction = st.fesea.as_ref().map(|fs| {
-            let idx = fs.dofs.map(|d| {
-                track
-                    .vector(&Shape {
-                        start: d,
-                        values: vec![1.0],
-                    })
-                    .idx[0]
-            });
-            RailCorrection {
-                fs,
-                idx,
-                rate: 1.0 / dt,
-                g_prev: vec![[0.0; 4]; W],
-                g_next: vec![[0.0; 4]; W],
-                wheel_r: Vec::new(),
-                inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
-                obs: points
-                    .iter()
-                    .filter(|_| cfg.discretisation.local_deflection && layers.first() == Some(&0))
-                    .map(|&x| {
-                        let mut s = vec![0.0; fs.modes.len()];
-                        fs.local_sines_into(x, &mut s);
-                        s.iter()
-                            .zip(&fs.modes)
-                            .map(|(s, m)| s / m.stiffness)
-                            .collect()
-                    })
-                    .collect(),
-                sines: Vec::new(),
-                movers: rail_movers,
-            }
-        });
+        let local_deflection = cfg.discretisation.local_deflection && layers.first() == Some(&0);
+        let correction = st
+            .fesea
+            .as_ref()
+            .map(|fs| RailCorrection::new(fs, &track, dt, points, local_deflection, &movers));
         Ok(Self {
             model,
             dampers: lanes.iter().map(|l| l.dampers.clone()).collect(),
