@@ -1,5 +1,9 @@
-//! The FE–SEA correction's force terms and output recovery in the Newmark engine.
+//! The FE–SEA correction in the Newmark engine: its set-up on the stepper, force terms and
+//! output recovery.
 
+use crate::engine::coupled::Mover;
+use crate::engine::integrator::Newmark;
+use crate::model::basis::Shape;
 use crate::model::fesea::FeSea;
 
 /// The FE–SEA force terms of the hybrid model on the rail's cubic DOFs g1..g4 (docs/model.md §6):
@@ -30,7 +34,46 @@ pub(super) struct RailCorrection<'m> {
     pub(super) movers: Vec<(f64, f64)>,
 }
 
-impl RailCorrection<'_> {
+impl<'m> RailCorrection<'m> {
+    /// The correction `fs` of the rail stepped by `track` (time step `dt`), its buffers for
+    /// W lanes; the local modes' deflection is recovered at the observation `points` when
+    /// `local_deflection`, and the moving forces on the rail are those of `movers` on layer 0.
+    /// The wheels' rows are sized once they are known (`NewmarkSide::with_wheels`).
+    pub(super) fn new<const W: usize>(
+        fs: &'m FeSea,
+        track: &Newmark<W>,
+        dt: f64,
+        movers: &[Mover],
+        (rail_points, pad_points): (&[f64], &[f64]),
+    ) -> Self {
+        let rail_movers: Vec<(f64, f64)> = movers
+            .iter()
+            .filter(|m: &&Mover| m.layer == 0)
+            .map(|m| (m.x0, m.magnitude))
+            .collect();
+        let idx = fs.dofs.map(|d| {
+            track
+                .vector(&Shape {
+                    start: d,
+                    values: vec![1.0],
+                })
+                .idx[0]
+        });
+        RailCorrection {
+            fs,
+            idx,
+            rate: 1.0 / dt,
+            g_prev: vec![[0.0; 4]; W],
+            g_next: vec![[0.0; 4]; W],
+            wheel_r: Vec::new(),
+            inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
+            obs: rail_points.iter().map(|&x| static_sines(fs, x)).collect(),
+            pad_obs: pad_points.iter().map(|&x| static_sines(fs, x)).collect(),
+            sines: Vec::new(),
+            movers: rail_movers,
+        }
+    }
+
     /// The corrections of the g entries of F_{n+1} for a unit load at x: (a + b/Δt, b).
     pub(super) fn unit_load(&self, x: f64) -> ([f64; 4], [f64; 4]) {
         self.with_rate(self.fs.load_terms(x))
@@ -85,7 +128,7 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// s_j(x)/k_j of every local mode: the local modes' static flexibility at x per unit load at
 /// a point with sines s_j (mode-acceleration recovery of their deflection).
-pub(super) fn static_sines(fs: &FeSea, x: f64) -> Vec<f64> {
+fn static_sines(fs: &FeSea, x: f64) -> Vec<f64> {
     let mut s = vec![0.0; fs.modes.len()];
     fs.local_sines_into(x, &mut s);
     s.iter()

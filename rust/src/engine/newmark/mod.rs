@@ -4,7 +4,8 @@
 //!
 //! - `mod.rs` (this file): the set-up and the state at t = 0;
 //! - `step`: the step's phases — loads, ports, the contact's compliance, the update, records;
-//! - `correction`: the FE–SEA correction's force terms and output recovery (hybrid rails).
+//! - `correction`: the FE–SEA correction's set-up, force terms and output recovery (hybrid
+//!   rails).
 
 mod correction;
 mod step;
@@ -19,7 +20,7 @@ use crate::model::Model;
 use crate::model::basis::Shape;
 use crate::outputs::catalog::{Pad, pads_of};
 use crate::outputs::{Record, RunResult};
-use correction::{RailCorrection, dot, static_sines};
+use correction::{RailCorrection, dot};
 
 /// The Newmark engine's side of W coupled runs on one model.
 pub(super) struct NewmarkSide<'m, const W: usize> {
@@ -182,42 +183,18 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             .map(|l| l.basis.shape_len())
             .max()
             .unwrap_or(0);
-        let rail_movers: Vec<(f64, f64)> = movers
-            .iter()
-            .filter(|m: &&Mover| m.layer == 0)
-            .map(|m| (m.x0, m.magnitude))
-            .collect();
-        let correction = st.fesea.as_ref().map(|fs| {
-            let idx = fs.dofs.map(|d| {
-                track
-                    .vector(&Shape {
-                        start: d,
-                        values: vec![1.0],
-                    })
-                    .idx[0]
-            });
-            RailCorrection {
-                fs,
-                idx,
-                rate: 1.0 / dt,
-                g_prev: vec![[0.0; 4]; W],
-                g_next: vec![[0.0; 4]; W],
-                wheel_r: Vec::new(),
-                inv_k: fs.modes.iter().map(|m| 1.0 / m.stiffness).collect(),
-                obs: points
-                    .iter()
-                    .filter(|_| cfg.discretisation.local_deflection && layers.first() == Some(&0))
-                    .map(|&x| static_sines(fs, x))
-                    .collect(),
-                pad_obs: pads
-                    .iter()
-                    .filter(|_| cfg.discretisation.local_deflection)
-                    .map(|p| static_sines(fs, p.x))
-                    .collect(),
-                sines: Vec::new(),
-                movers: rail_movers,
-            }
-        });
+        // The local modes' deflection is added to the rail's records and the pads' rail ends.
+        let local = cfg.discretisation.local_deflection;
+        let rail_points = if local && layers.first() == Some(&0) {
+            points.to_vec()
+        } else {
+            Vec::new()
+        };
+        let pad_points: Vec<f64> = pads.iter().filter(|_| local).map(|p| p.x).collect();
+        let correction = st
+            .fesea
+            .as_ref()
+            .map(|fs| RailCorrection::new(fs, &track, dt, &movers, (&rail_points, &pad_points)));
         Ok(Self {
             model,
             dampers: lanes.iter().map(|l| l.dampers.clone()).collect(),

@@ -1,0 +1,112 @@
+//! Shape functions of one beam layer and their exact integrals.
+//!
+//! Two discretisations share one representation: a layer is a list of *pieces* (intervals),
+//! each carrying a few basis functions that are, on that piece, either a cubic polynomial or
+//! a scaled sine. The modal basis (docs/model.md §2.1) is a single piece over [0, L] with the four
+//! Hermite cubics and the mass-normalised sines s_n = sqrt(2/(ρAL))·sin(nπx/L); the FEM basis
+//! (§2.2) is one piece per element with the four element Hermite cubics. Every mass, stiffness
+//! and coupling integral is a product of two such functions and is evaluated in closed form,
+//! so the sine–sine blocks come out diagonal to round-off.
+//!
+//! - `mod.rs` (this file): the shared representation — [`Piece`], [`Shape`], [`LayerBasis`];
+//! - `integrals`: piece functions ([`Func`]), the Hermite cubics and their exact integrals;
+//! - `modal`: the modal basis ([`ModalBasis`]) and its Gram blocks in closed form;
+//! - `fem`: the finite-element mesh ([`FemBasis`]): interdependent Timoshenko elements, local
+//!   flexibility, Hertz patches.
+
+mod fem;
+mod integrals;
+mod modal;
+
+pub use fem::FemBasis;
+use fem::interdependent;
+pub use integrals::{Func, hermite, integrate};
+pub use modal::ModalBasis;
+
+/// Basis functions of a layer on one interval: (local DOF, function) pairs.
+#[derive(Clone, Debug)]
+pub struct Piece {
+    pub a: f64,
+    pub b: f64,
+    pub funcs: Vec<(usize, Func)>,
+}
+
+/// A shape vector: `values` of the contiguous layer DOFs `start..start + values.len()`.
+#[derive(Clone, Debug, Default)]
+pub struct Shape {
+    pub start: usize,
+    pub values: Vec<f64>,
+}
+
+/// The basis of one layer.
+#[derive(Clone, Debug)]
+pub enum LayerBasis {
+    Modal(ModalBasis),
+    Fem(FemBasis),
+}
+
+impl LayerBasis {
+    pub fn n_dofs(&self) -> usize {
+        match self {
+            LayerBasis::Modal(b) => b.n_dofs(),
+            LayerBasis::Fem(b) => b.n_dofs(),
+        }
+    }
+
+    /// Integration pieces (FEM only; modal Gram blocks are computed analytically).
+    pub fn pieces(&self) -> Vec<Piece> {
+        match self {
+            LayerBasis::Modal(_) => Vec::new(),
+            LayerBasis::Fem(b) => b.pieces(),
+        }
+    }
+
+    /// Largest number of nonzeros of a shape vector.
+    pub fn shape_len(&self) -> usize {
+        match self {
+            LayerBasis::Modal(b) => b.n_dofs(),
+            LayerBasis::Fem(_) => 4,
+        }
+    }
+
+    /// Displacement shape vector N(x) (layer-local DOF numbering). `out.values` must have
+    /// length `shape_len()`; it is overwritten without allocating.
+    #[inline]
+    pub fn eval(&self, x: f64, out: &mut Shape) {
+        match self {
+            LayerBasis::Modal(b) => {
+                out.start = 0;
+                if (0.0..=b.length).contains(&x) {
+                    b.eval_into(x, &mut out.values);
+                } else {
+                    out.values.fill(0.0);
+                }
+            }
+            LayerBasis::Fem(b) if !b.covers(x) => {
+                out.start = 0;
+                out.values.fill(0.0);
+            }
+            LayerBasis::Fem(b) => {
+                let e = b.element_of(x);
+                let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
+                out.start = 2 * e;
+                let xi = x - a;
+                for (o, c) in out.values.iter_mut().zip(&interdependent(l, b.phi[e])[0]) {
+                    *o = c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]));
+                }
+            }
+        }
+    }
+
+    pub fn shape(&self, x: f64) -> Shape {
+        let mut s = Shape {
+            start: 0,
+            values: vec![0.0; self.shape_len()],
+        };
+        self.eval(x, &mut s);
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests;
