@@ -24,7 +24,8 @@ fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> 
     cases
         .map(|(b, k, c)| {
             let mut cfg = base.clone();
-            cfg.tids = Some(DamperGroup {
+            cfg.dampers = vec![DamperGroup {
+                name: Some("tids".into()),
                 inertance: b,
                 stiffness: k,
                 damping: c,
@@ -35,7 +36,7 @@ fn tid_jobs(base: &Config, n: usize, profile: &std::sync::Arc<vtb::Profile>) -> 
                 positions: None,
                 upper: "rail".into(),
                 lower: "slab".into(),
-            });
+            }];
             Job {
                 config: cfg,
                 profile: profile.clone(),

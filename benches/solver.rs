@@ -70,7 +70,8 @@ fn bench_paper(c: &mut Criterion) {
     g.bench_function("hybrid_full_run", |b| b.iter(|| run(&hybrid)));
     // The optimisation's evaluation: the hybrid with 10 rail–slab TIDs (vtb.tids_around).
     let mut tids = presets::paper();
-    tids.tids = Some(vtb::config::DamperGroup {
+    tids.dampers = vec![vtb::config::DamperGroup {
+        name: Some("tids".into()),
         inertance: 5.0,
         stiffness: 2e8,
         damping: 1e3,
@@ -81,7 +82,7 @@ fn bench_paper(c: &mut Criterion) {
         positions: None,
         upper: "rail".into(),
         lower: "slab".into(),
-    });
+    }];
     g.bench_function("hybrid_10_tids_full_run", |b| b.iter(|| run(&tids)));
     let mut modal = presets::paper();
     modal.discretisation.method = vtb::config::Method::Modal;

@@ -31,6 +31,7 @@ from ..errors import config_error
 from .irregularity import SPECTRA, Irregularity
 from . import gateway
 from .schema import StrictFields
+from .vehicles import VEHICLE_MODELS, QuarterCar, Vehicle, vehicle_table  # noqa: F401 - the classes are re-exported
 from .schema import default as _default
 from .schema import documented
 
@@ -134,90 +135,7 @@ class Discretisation(StrictFields):
     local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
     element_flexibility: bool = _default("DiscretisationConfig", "element_flexibility")
     synthesis_cutoff: Optional[float] = _default("DiscretisationConfig", "synthesis_cutoff")
-
-
-class _Wheeled:
-    """What every vehicle model's class shares: its layout in a run's records."""
-
-    @property
-    def dofs(self) -> tuple:
-        """Names of the model's DOFs, in the order of ``Result.vehicle_disp``."""
-        return tuple(gateway.vehicle_models()[self.model][0])
-
-    @property
-    def n_wheels(self) -> int:
-        """Wheels of the model (the columns of ``Result.contact_force`` per vehicle)."""
-        return gateway.vehicle_models()[self.model][1]
-
-
-@documented("VehicleConfig.car")
-@dataclass
-class Vehicle(_Wheeled, StrictFields):
-    """Zhai's 10-DOF car (docs/vehicles.md): secondary suspension per bogie, primary per
-    wheelset (both sides lumped). The modelled top layer is one of ``rails`` identical rails,
-    so it carries 1/``rails`` of every axle load. A quarter car is :class:`QuarterCar`
-    (:meth:`quarter_car` builds one)."""
-
-    m_c: float
-    j_c: float
-    m_t: float
-    j_t: float
-    m_w: float
-    k_s: float
-    c_s: float
-    k_p: float
-    c_p: float
-    l_c: float
-    l_t: float
-    wheel_radius: float
-    x_front: float
-    contact_constant: Optional[float] = _default("VehicleConfig.car", "contact_constant")
-    rails: int = _default("VehicleConfig.car", "rails")
-    contact_patch: bool = _default("VehicleConfig.car", "contact_patch")
-    rail_crown_radius: float = _default("VehicleConfig.car", "rail_crown_radius")
-    model: Literal["car"] = _default("VehicleConfig.car", "model")
-
-    @staticmethod
-    def quarter_car(sprung_mass: float, wheel_mass: float, stiffness: float, damping: float,
-                    x_front: float, wheel_radius: float = 0.46, **kw) -> "QuarterCar":
-        """A quarter car: ``sprung_mass`` (kg) on a spring ``stiffness`` (N/m) ∥ dashpot
-        ``damping`` (N·s/m) over one wheel of ``wheel_mass`` (kg) at ``x_front`` (m) at t = 0;
-        ``kw`` sets the contact fields (``rails``, ``contact_patch``, ...)."""
-        return QuarterCar(m_c=sprung_mass, m_w=wheel_mass, k_p=stiffness, c_p=damping, x_front=x_front,
-                          wheel_radius=wheel_radius, **kw)
-
-    @property
-    def length(self) -> float:
-        """Distance from the leading to the trailing wheel (m)."""
-        return 2.0 * (self.l_c + self.l_t)
-
-
-@documented("VehicleConfig.quarter_car")
-@dataclass
-class QuarterCar(_Wheeled, StrictFields):
-    """A quarter car (docs/vehicles.md): a sprung mass ``m_c`` on ``k_p`` ∥ ``c_p`` over one
-    wheel ``m_w``."""
-
-    m_c: float
-    m_w: float
-    k_p: float
-    c_p: float
-    wheel_radius: float
-    x_front: float
-    contact_constant: Optional[float] = _default("VehicleConfig.quarter_car", "contact_constant")
-    rails: int = _default("VehicleConfig.quarter_car", "rails")
-    contact_patch: bool = _default("VehicleConfig.quarter_car", "contact_patch")
-    rail_crown_radius: float = _default("VehicleConfig.quarter_car", "rail_crown_radius")
-    model: Literal["quarter_car"] = "quarter_car"
-
-    @property
-    def length(self) -> float:
-        """Distance from the leading to the trailing wheel (m): one wheel."""
-        return 0.0
-
-
-#: The class of each vehicle model, by its ``model`` tag.
-VEHICLE_MODELS = {"car": Vehicle, "quarter_car": QuarterCar}
+    excitation_wavelengths: Optional[list] = _default("DiscretisationConfig", "excitation_wavelengths")
 
 
 @documented("MovingForceConfig")
@@ -284,6 +202,11 @@ class DamperGroup(StrictFields):
     upper: str = _default("DamperGroup", "upper")
     lower: str = _default("DamperGroup", "lower")
     kind: Literal["tid", "tvmd", "tmd"] = _default("DamperGroup", "kind")
+    name: Optional[str] = _default("DamperGroup", "name")
+
+    def _field_path(self, name: str) -> str:
+        """A named group's fields are addressed by its name (``tids.count``), as the core does."""
+        return f"{self.name}.{name}" if isinstance(self.name, str) and self.name else super()._field_path(name)
 
     def locations(self) -> np.ndarray:
         """The dampers' positions (m): ``positions``, or the pattern ``x0 + i·spacing``."""
@@ -308,6 +231,8 @@ class DamperGroup(StrictFields):
 
 
 TIDs = DamperGroup
+#: The name of the article's damper group (``Config.tids``).
+TIDS = "tids"
 
 
 @documented("Config", irregularity="The track irregularity under the wheels, generated on the Python side (:class:`vtb.Irregularity`; m, positive = dip).")
@@ -324,7 +249,6 @@ class Config(StrictFields):
     solver: Solver = field(default_factory=Solver)
     output: Output = field(default_factory=Output)
     irregularity: Irregularity = field(default_factory=Irregularity)
-    tids: Optional[DamperGroup] = _default("Config", "tids")
     dampers: list = _default("Config", "dampers")
     accept_implausible: list = _default("Config", "accept_implausible")
 
@@ -338,49 +262,60 @@ class Config(StrictFields):
             )
             irr = self.irregularity
             irr_text = irr.kind if irr.kind in ("none", "sampled") else f"{irr.kind} seed {irr.seed}, scale {irr.scale:g}"
-            groups = ([self.tids] if self.tids is not None else []) + list(self.dampers)
-            tids = "; ".join(g.describe() for g in groups) or "none"
+            tids = "; ".join(g.describe() for g in self.dampers) or "none"
             end = "auto" if self.solver.t_end is None else f"{self.solver.t_end:g} s"
             return (f"Config({self.discretisation.method}: {layers}; L = {self.structure.length:g} m; {len(self.vehicles)} car(s), "
                     f"{len(self.forces)} force(s) at {self.speed:g} m/s; dt = {self.solver.dt:g} s, t_end {end}; irregularity {irr_text}; dampers {tids})")
         except Exception:  # noqa: BLE001 - a malformed config still has a representation
             return f"Config(<{len(self.__dict__)} fields; to_dict() shows them>)"
 
+    @property
+    def tids(self) -> Optional[DamperGroup]:
+        """The article's tuned inerter dampers: the damper group named ``"tids"`` (``None``
+        without one), the group the article's studies vary; field paths ``tids.stiffness``
+        reach it. Assigning a group names it ``"tids"`` and puts it in that group's place (first
+        when there was none); assigning ``None`` removes it."""
+        return next((g for g in self.dampers if getattr(g, "name", None) == TIDS), None)
+
+    @tids.setter
+    def tids(self, group: Optional[DamperGroup]) -> None:
+        rest = [g for g in self.dampers if getattr(g, "name", None) != TIDS]
+        if group is None:
+            self.dampers = rest
+            return
+        if not isinstance(group, DamperGroup):
+            raise config_error("tids", group, "expected a vtb.DamperGroup (or None)")
+        group.name = TIDS
+        at = next((i for i, g in enumerate(self.dampers) if getattr(g, "name", None) == TIDS), 0)
+        self.dampers = rest[:at] + [group] + rest[at:]
+
     # ------------------------------------------------------------------ serialisation
     def to_dict(self) -> dict:
         """Plain nested dict (TOML/JSON friendly; damping carries a ``kind`` tag)."""
         return to_plain(self)
 
-    def excitation_omega_r(self) -> Optional[float]:
-        """The default ω_r (rad/s) from the irregularity: 2π·v/sqrt(λ_min·λ_max) for a
-        spectrum (the centre of its band v/λ on a log scale), 2π·v/λ for a corrugation
-        (``wavelength``) or a dip (``length``); ``None`` when there is no wavelength."""
+    def excitation_wavelengths(self) -> Optional[list]:
+        """[λ_min, λ_max] (m) the irregularity excites: a spectrum's band, a corrugation's
+        ``wavelength`` or a dip's ``length`` twice; ``None`` without a wavelength. The core
+        takes its default ω_r from it (``discretisation.excitation_wavelengths``)."""
         irr = self.irregularity
-        try:
-            if irr.kind in SPECTRA:
-                lam = math.sqrt(irr.wavelength_min * irr.wavelength_max)
-            elif irr.kind == "corrugation":
-                lam = irr.wavelength
-            elif irr.kind == "cosine_dip":
-                lam = irr.length
-            else:
-                return None
-            w = float(2.0 * math.pi * self.speed / lam)
-        except (AttributeError, TypeError, ValueError, ZeroDivisionError):
-            return None  # a bad speed or band: the core names the field
-        return w if math.isfinite(w) and w > 0 else None
+        band = {"corrugation": ("wavelength", "wavelength"), "cosine_dip": ("length", "length")}.get(
+            irr.kind, ("wavelength_min", "wavelength_max") if irr.kind in SPECTRA else None)
+        if band is None:
+            return None
+        values = [getattr(irr, name, None) for name in band]
+        # a bad band is named by the irregularity's own check
+        return [float(v) for v in values] if all(isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in values) else None
 
     def to_core_json(self) -> str:
-        """JSON for the Rust core (everything but the irregularity, with the default ω_r of a
-        hybrid run resolved from it). Non-finite numbers, which JSON cannot carry, raise
+        """JSON for the Rust core (everything but the irregularity; a hybrid run carries the
+        wavelengths its irregularity excites, from which the core takes the default ω_r). Non-finite numbers, which JSON cannot carry, raise
         :class:`~vtb.errors.ConfigError` here."""
         d = self.to_dict()
         d.pop("irregularity")
         disc = d.get("discretisation")
-        if isinstance(disc, dict) and disc.get("method") == "hybrid" and disc.get("omega_r") is None:
-            disc["omega_r"] = self.excitation_omega_r()
-        if d.get("tids") is None:
-            d.pop("tids", None)
+        if isinstance(disc, dict) and disc.get("method") == "hybrid" and disc.get("excitation_wavelengths") is None:
+            disc["excitation_wavelengths"] = self.excitation_wavelengths()
         try:
             return json.dumps(d, allow_nan=False)
         except (TypeError, ValueError):
@@ -506,26 +441,20 @@ def to_plain(obj):
 
 _LIST_ITEM = {("Structure", "layers"): Layer, ("Structure", "couplings"): Coupling, ("Config", "vehicles"): tuple(VEHICLE_MODELS.values()), ("Config", "forces"): MovingForce, ("Config", "dampers"): DamperGroup, ("Irregularity", "parts"): Irregularity}
 
-#: The car's own fields, which a quarter car written by vtb before the tagged vehicles held at 0.
-_CAR_ONLY = ("j_c", "m_t", "j_t", "k_s", "c_s", "l_c", "l_t")
-
-
-def _vehicle_table(data, path: str) -> tuple:
-    """The class of a vehicle table by its ``model`` tag (``"car"`` when absent), and the table.
-    A quarter car written before each model carried only its own fields has the car's at 0:
-    they are dropped with a :class:`DeprecationWarning`."""
-    if not isinstance(data, dict):
-        return Vehicle, data
-    model = data.get("model", "car")
-    cls = VEHICLE_MODELS.get(model) if isinstance(model, str) else None
-    if cls is None:
-        raise config_error(f"{path}.model", model, f"must be one of {list(VEHICLE_MODELS)}")
-    zeros = [k for k in _CAR_ONLY if cls is QuarterCar and data.get(k) == 0]
-    if zeros:
-        warnings.warn(f"{path}: a quarter car carries only its own fields; dropped the car's {', '.join(zeros)} "
-                      "(all 0): remove them from the file", DeprecationWarning, stacklevel=4)
-        data = {k: v for k, v in data.items() if k not in zeros}
-    return cls, data
+def _legacy_tids(data: dict) -> dict:
+    """A table written when the article's group was a key of its own (``tids``, beside
+    ``dampers``): that group, named ``"tids"``, first among the damper groups."""
+    data = dict(data)
+    group = data.pop("tids")
+    if group is None:
+        return data
+    if isinstance(group, DamperGroup):
+        group.name = TIDS
+    elif isinstance(group, dict):
+        group = {"name": TIDS, **group}
+    dampers = data.get("dampers", [])
+    data["dampers"] = [group, *dampers] if isinstance(dampers, (list, tuple)) else dampers
+    return data
 
 
 def _from_plain(cls, data, path: str):
@@ -534,6 +463,8 @@ def _from_plain(cls, data, path: str):
         return data
     if not isinstance(data, dict):
         raise config_error(where, data, f"expected a table for {cls.__name__}")
+    if cls is Config and "tids" in data:
+        data = _legacy_tids(data)
     hints = typing.get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(data) - names)
@@ -552,7 +483,7 @@ def _from_plain(cls, data, path: str):
         if item is not None:
             if not isinstance(v, (list, tuple)):
                 raise config_error(sub, v, "expected a list")
-            kwargs[f.name] = [_from_plain(*(_vehicle_table(x, f"{sub}[{i}]") if isinstance(item, tuple) else (item, x)), f"{sub}[{i}]")
+            kwargs[f.name] = [_from_plain(*(vehicle_table(x, f"{sub}[{i}]") if isinstance(item, tuple) else (item, x)), f"{sub}[{i}]")
                               for i, x in enumerate(v)]
         elif f.name == "damping" and cls is Layer:
             kwargs[f.name] = _damping_from_plain(v, sub)

@@ -77,6 +77,8 @@ class StrictFields:
 
     def __setattr__(self, name: str, value) -> None:
         fields = getattr(type(self), "__dataclass_fields__", None)
+        if isinstance(getattr(type(self), name, None), property):
+            return object.__setattr__(self, name, value)  # a property's setter checks the value
         if fields is not None and name not in fields:
             known = ", ".join(sorted(fields))
             raise config_error(self._field_path(name), value, f"{type(self).__name__} has no such field (known: {known})")

@@ -106,7 +106,7 @@ def track_zones(config: Config, approach: float = 50.0, exit: float = 50.0,
         v.x_front += a
     for f in out.forces:
         f.x0 += a
-    for g in ([out.tids] if out.tids is not None else []) + out.dampers:
+    for g in out.dampers:
         if g.positions is not None:
             g.positions = [x + a for x in g.positions]
         else:

@@ -134,9 +134,13 @@ def _structure_config(config: Config) -> Config:
     if not isinstance(config, Config):
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
     c = config.copy()
-    c.tids, c.dampers = None, []
+    c.dampers = []
     c.discretisation.synthesis_cutoff = None
     return c
+
+
+#: The discretisation's fields added since the cache format, with their defaults.
+_ADDED = {"excitation_wavelengths": None}
 
 
 def cache_key(config: Config) -> str:
@@ -152,6 +156,10 @@ def cache_key(config: Config) -> str:
     # in, every field added to them would orphan every cached reduction.
     for neutral in ("vehicles", "forces", "speed", "solver", "output"):
         structure.pop(neutral, None)
+    # Fields the discretisation gained after this format, at their default, change no matrix.
+    for name, default in _ADDED.items():
+        if structure["discretisation"].get(name) == default:
+            structure["discretisation"].pop(name)
     text = json.dumps({"format": FORMAT, "structure": structure,
                        "cutoff": float(cutoff), "basis_ratio": BASIS_RATIO, "reach": RESIDUAL_REACH}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()

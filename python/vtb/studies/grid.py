@@ -63,6 +63,11 @@ def _step(obj, part, path: str):
         if not isinstance(obj, list) or part >= len(obj):
             raise config_error(path, part, f"index out of range (the list has {len(obj) if isinstance(obj, list) else 0} items)")
         return obj[part]
+    if isinstance(obj, Config) and isinstance(part, str):
+        # a damper group by its name (``tids`` is also a property: None without the group)
+        group = next((g for g in obj.dampers if getattr(g, "name", None) == part), None)
+        if group is not None or isinstance(getattr(Config, part, None), property):
+            return group
     if not dataclasses.is_dataclass(obj) or part not in {f.name for f in dataclasses.fields(obj)}:
         known = sorted(f.name for f in dataclasses.fields(obj)) if dataclasses.is_dataclass(obj) else []
         raise config_error(path, part, f"no such field of {type(obj).__name__}" + (f" (known: {', '.join(known)})" if known else ""))

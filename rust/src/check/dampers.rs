@@ -1,9 +1,25 @@
-//! Damper groups on their layers, and their total count.
+//! Damper groups: their names, their dampers on their layers, and their total count.
 
 use super::*;
 
+/// Names a group may not take: the configuration's own fields, which a group's path would
+/// shadow.
+const RESERVED: [&str; 10] = [
+    "structure",
+    "discretisation",
+    "vehicles",
+    "forces",
+    "speed",
+    "solver",
+    "output",
+    "dampers",
+    "accept_implausible",
+    "irregularity",
+];
+
 /// Every damper group (`damper_groups`), and their total count.
 pub(super) fn groups(cfg: &Config, length: f64) -> Result<()> {
+    names(cfg)?;
     let mut total = 0;
     for (path, g) in cfg.damper_groups() {
         g.validate(&path, length)?;
@@ -39,6 +55,38 @@ fn dampers_on_layers(cfg: &Config, path: &str, g: &DamperGroup) -> Result<()> {
     for i in std::iter::once(upper).chain(lower) {
         for x in g.locations() {
             on_layer(cfg, &field, x, i)?;
+        }
+    }
+    Ok(())
+}
+
+/// A group's name is an identifier, not a field of the configuration, and unique.
+fn names(cfg: &Config) -> Result<()> {
+    for (i, g) in cfg.dampers.iter().enumerate() {
+        let Some(name) = &g.name else { continue };
+        let field = format!("dampers[{i}].name");
+        let identifier = name
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !identifier || RESERVED.contains(&name.as_str()) {
+            return Err(VtbError::config(
+                field,
+                format!("{name:?}"),
+                "must be an identifier (letters, digits, _) other than a configuration field's \
+                 name",
+            ));
+        }
+        if cfg.dampers[..i]
+            .iter()
+            .any(|o| o.name.as_ref() == Some(name))
+        {
+            return Err(VtbError::config(
+                field,
+                format!("{name:?}"),
+                "names another group too",
+            ));
         }
     }
     Ok(())

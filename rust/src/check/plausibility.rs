@@ -56,10 +56,6 @@ fn vehicles(c: &Config, name: &str) -> Vec<f64> {
         .collect()
 }
 
-fn tids(c: &Config, f: fn(&crate::config::DamperGroup) -> f64) -> Vec<f64> {
-    c.tids.iter().map(f).collect()
-}
-
 fn dampers(c: &Config, f: fn(&crate::config::DamperGroup) -> f64) -> Vec<f64> {
     c.dampers.iter().map(f).collect()
 }
@@ -251,22 +247,6 @@ pub const RANGES: &[Range] = &[
         get: |c| c.vehicles.iter().map(|v| v.wheels.wheel_radius).collect(),
     },
     Range {
-        field: "tids.inertance",
-        min: 1e-3,
-        max: 1e5,
-        unit: "kg",
-        covers: "inerters",
-        get: |c| tids(c, |t| t.inertance),
-    },
-    Range {
-        field: "tids.stiffness",
-        min: 1e3,
-        max: 1e11,
-        unit: "N/m",
-        covers: "damper springs",
-        get: |c| tids(c, |t| t.stiffness),
-    },
-    Range {
         field: "dampers[*].inertance",
         min: 1e-3,
         max: 1e5,
@@ -281,14 +261,6 @@ pub const RANGES: &[Range] = &[
         unit: "N/m",
         covers: "damper springs",
         get: |c| dampers(c, |t| t.stiffness),
-    },
-    Range {
-        field: "tids.damping",
-        min: 1e-2,
-        max: 1e7,
-        unit: "N·s/m",
-        covers: "damper dashpots",
-        get: |c| tids(c, |t| t.damping),
     },
     Range {
         field: "dampers[*].damping",
@@ -309,9 +281,13 @@ pub const RANGES: &[Range] = &[
 ];
 
 /// The field's path for index i (`[*]` → `[i]`, a qualifier in parentheses dropped).
-fn path(field: &str, i: usize) -> String {
+fn path(cfg: &Config, field: &str, i: usize) -> String {
     let base = field.split(" (").next().unwrap_or(field);
-    base.replace("[*]", &format!("[{i}]"))
+    match base.strip_prefix("dampers[*]") {
+        // a named group is addressed by its name
+        Some(rest) => format!("{}{rest}", cfg.dampers[i].path(i)),
+        None => base.replace("[*]", &format!("[{i}]")),
+    }
 }
 
 /// The likely unit mistake for a value outside its range.
@@ -348,7 +324,7 @@ pub fn check(cfg: &Config) -> Result<()> {
     // An entry that names no field of the table would silently accept nothing: a typo.
     let known: Vec<String> = RANGES
         .iter()
-        .flat_map(|r| (0..(r.get)(cfg).len()).map(move |i| path(r.field, i)))
+        .flat_map(|r| (0..(r.get)(cfg).len()).map(move |i| path(cfg, r.field, i)))
         .collect();
     for (j, a) in cfg.accept_implausible.iter().enumerate() {
         if !known.contains(a) {
@@ -369,7 +345,7 @@ pub fn check(cfg: &Config) -> Result<()> {
             {
                 continue;
             }
-            let p = path(r.field, i);
+            let p = path(cfg, r.field, i);
             if cfg.accept_implausible.contains(&p) {
                 continue;
             }

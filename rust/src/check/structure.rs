@@ -95,6 +95,17 @@ pub(super) fn discretisation(cfg: &Config) -> Result<()> {
             format!("must be within [2, {MAX_ELEMENTS}]"),
         ));
     }
+    if let Some([lo, hi]) = d.excitation_wavelengths {
+        positive("discretisation.excitation_wavelengths[0]", lo)?;
+        positive("discretisation.excitation_wavelengths[1]", hi)?;
+        if hi < lo {
+            return Err(VtbError::config(
+                "discretisation.excitation_wavelengths[1]",
+                hi,
+                format!("must not be shorter than excitation_wavelengths[0] = {lo}"),
+            ));
+        }
+    }
     if let Some(w) = d.omega_r {
         positive("discretisation.omega_r", w)?;
     }

@@ -54,6 +54,10 @@ pub struct DamperParams {
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DamperGroup {
+    /// A name (no unit) by which field paths and studies address the group instead of its
+    /// index (`tids.stiffness` for the group named `tids`); unique among the groups.
+    #[serde(default)]
+    pub name: Option<String>,
     /// `"tid"` (spring ∥ dashpot, then inerter), `"tvmd"` (spring, then inerter ∥ dashpot)
     /// or `"tmd"` (a mass `inertance` on spring ∥ dashpot; `lower` must be `"ground"`).
     #[serde(default)]
@@ -87,6 +91,11 @@ pub struct DamperGroup {
 }
 
 impl DamperGroup {
+    /// The group's field path: its name, or `dampers[i]` (`i` its index).
+    pub fn path(&self, i: usize) -> String {
+        self.name.clone().unwrap_or_else(|| format!("dampers[{i}]"))
+    }
+
     /// The dampers' positions (m), from `positions` or the pattern (validated configs).
     pub fn locations(&self) -> Vec<f64> {
         match &self.positions {

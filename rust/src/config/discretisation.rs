@@ -31,6 +31,11 @@ pub struct DiscretisationConfig {
     /// of the local modes' frequency range (docs/fesea.md).
     #[serde(default)]
     pub omega_r: Option<f64>,
+    /// The shortest and longest wavelength (m) the irregularity excites, [λ_min, λ_max] (a
+    /// spectrum's band; a corrugation's or a dip's one wavelength twice), from which the
+    /// default ω_r follows; the Python layer fills it from `Config.irregularity`.
+    #[serde(default)]
+    pub excitation_wavelengths: Option<[f64; 2]>,
     /// Global–local coupling of the FE–SEA correction: `"full"` or the article's `"mass"`.
     #[serde(default)]
     pub fesea_coupling: FeSeaCoupling,
@@ -79,6 +84,7 @@ impl Default for DiscretisationConfig {
             method: Method::Modal,
             fem_elements: default_fem_elements(),
             omega_r: None,
+            excitation_wavelengths: None,
             fesea_coupling: FeSeaCoupling::Full,
             local_deflection: true,
             element_flexibility: true,

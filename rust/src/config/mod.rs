@@ -54,12 +54,10 @@ pub struct Config {
     /// Observation points and the metrics' analysis window.
     #[serde(default)]
     pub output: OutputConfig,
-    /// The tuned inerter dampers between two layers (optional; none by default): the group
-    /// the studies vary.
-    #[serde(default)]
-    pub tids: Option<DamperGroup>,
-    /// Further damper groups, each of its own kind, tuning and positions; their internal
-    /// nodes follow those of `tids`.
+    /// The damper groups, each of its own kind, tuning and positions (none by default); their
+    /// internal nodes follow in this order. A named group is addressed by its name (the
+    /// article's tuned inerter dampers are the group `tids`: `tids.stiffness`); a table's
+    /// legacy key `tids` loads as that group, first.
     #[serde(default)]
     pub dampers: Vec<DamperGroup>,
     /// Field paths (e.g. `"speed"`, `"structure.couplings[3].stiffness"`) whose values may lie
@@ -73,8 +71,9 @@ impl Config {
     /// Parses the JSON form; a field of the wrong type or range is reported with its dotted
     /// path (`tids.count`, `structure.layers[0].modes`) and the value found there.
     pub fn from_json(text: &str) -> Result<Config> {
-        let tree: serde_json::Value = serde_json::from_str(text)
+        let mut tree: serde_json::Value = serde_json::from_str(text)
             .map_err(|e| VtbError::config("<json>", "(text)", e.to_string()))?;
+        legacy_tids(&mut tree);
         serde_path_to_error::deserialize(&tree).map_err(|e| {
             let mut reason = e.inner().to_string();
             let mut path = e.path().to_string();
@@ -102,6 +101,7 @@ impl Config {
             }
             let value =
                 value_at(&tree, &path).map_or_else(|| "(missing)".to_string(), |v| v.to_string());
+            let path = named_group_path(&tree, path);
             let field = if path == "." {
                 "<config>".to_string()
             } else {
@@ -220,18 +220,20 @@ impl Config {
         }
     }
 
-    /// The damper groups with their field paths: `tids` first, then `dampers[i]`.
+    /// The damper groups with their field paths: a named group's name, else `dampers[i]`.
     pub fn damper_groups(&self) -> Vec<(String, &DamperGroup)> {
-        self.tids
+        self.dampers
             .iter()
-            .map(|g| ("tids".to_string(), g))
-            .chain(
-                self.dampers
-                    .iter()
-                    .enumerate()
-                    .map(|(i, g)| (format!("dampers[{i}]"), g)),
-            )
+            .enumerate()
+            .map(|(i, g)| (g.path(i), g))
             .collect()
+    }
+
+    /// The damper group named `name`, if there is one.
+    pub fn damper_group(&self, name: &str) -> Option<&DamperGroup> {
+        self.dampers
+            .iter()
+            .find(|g| g.name.as_deref() == Some(name))
     }
 
     /// Every damper of every group, in node order.
@@ -240,6 +242,49 @@ impl Config {
             .into_iter()
             .flat_map(|(_, g)| vec![g.params(); g.locations().len()])
             .collect()
+    }
+}
+
+/// The legacy key `tids` (one damper group beside `dampers`) as the first damper group,
+/// named `tids`.
+fn legacy_tids(tree: &mut serde_json::Value) {
+    let Some(root) = tree.as_object_mut() else {
+        return;
+    };
+    let Some(tids) = root.remove("tids") else {
+        return;
+    };
+    if tids.is_null() {
+        return;
+    }
+    let mut group = tids;
+    if let Some(g) = group.as_object_mut() {
+        g.entry("name").or_insert_with(|| "tids".into());
+    }
+    match root.get_mut("dampers") {
+        Some(serde_json::Value::Array(list)) => list.insert(0, group),
+        _ => {
+            root.insert("dampers".into(), serde_json::Value::Array(vec![group]));
+        }
+    }
+}
+
+/// A path into `dampers[i]` of a named group by the group's name (`dampers[0].count` →
+/// `tids.count`), as the checks name it.
+fn named_group_path(tree: &serde_json::Value, path: String) -> String {
+    let Some(rest) = path.strip_prefix("dampers[") else {
+        return path;
+    };
+    let Some((i, tail)) = rest.split_once(']') else {
+        return path;
+    };
+    let name = i
+        .parse::<usize>()
+        .ok()
+        .and_then(|i| tree.get("dampers")?.get(i)?.get("name")?.as_str());
+    match name {
+        Some(name) => format!("{name}{tail}"),
+        None => path,
     }
 }
 

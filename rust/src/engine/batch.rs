@@ -63,7 +63,7 @@ fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&
 /// Jobs that may share one model: configurations equal up to the dampers' parameters.
 pub fn model_key(cfg: &Config) -> String {
     let mut c = cfg.clone();
-    for t in c.tids.iter_mut().chain(c.dampers.iter_mut()) {
+    for t in c.dampers.iter_mut() {
         (t.inertance, t.stiffness, t.damping) = (0.0, 0.0, 0.0);
     }
     serde_json::to_string(&c).expect("a config serialises")

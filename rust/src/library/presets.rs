@@ -172,7 +172,6 @@ pub fn paper() -> Config {
             points: vec![80.0],
             ..OutputConfig::default()
         },
-        tids: None,
         dampers: Vec::new(),
         accept_implausible: Vec::new(),
     }

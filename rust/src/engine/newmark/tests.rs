@@ -9,7 +9,8 @@ use crate::library::presets;
 fn short_with_dampers() -> Config {
     let mut cfg = presets::paper();
     cfg.solver.t_end = Some(0.05);
-    cfg.tids = Some(DamperGroup {
+    cfg.dampers = vec![DamperGroup {
+        name: Some("tids".into()),
         kind: DamperKind::Tid,
         inertance: 3.0,
         stiffness: 1e8,
@@ -20,7 +21,7 @@ fn short_with_dampers() -> Config {
         positions: None,
         upper: "rail".into(),
         lower: "slab".into(),
-    });
+    }];
     cfg
 }
 

@@ -252,11 +252,17 @@ pub fn local_modes(cfg: &Config, rail: &Layer) -> Result<Vec<ModeCoupling>> {
     Ok(out)
 }
 
-/// The representative excitation frequency ω_r (rad/s).
-fn representative_omega(cfg: &Config, locals: &[ModeCoupling]) -> f64 {
-    // Default: the geometric centre of the local modes' frequency range (the Python layer
-    // passes the centre of the irregularity's excitation band instead, see `vtb.config`).
-    cfg.discretisation.omega_r.unwrap_or_else(|| {
+/// The representative excitation frequency ω_r (rad/s): `discretisation.omega_r`, else the
+/// geometric centre 2π·v/√(λ_min·λ_max) of the band the irregularity excites at the run's
+/// speed (`discretisation.excitation_wavelengths`), else the geometric centre of the local
+/// modes' frequency range (docs/fesea.md).
+pub fn representative_omega(cfg: &Config, locals: &[ModeCoupling]) -> f64 {
+    let d = &cfg.discretisation;
+    let excited = d.excitation_wavelengths.and_then(|[lo, hi]| {
+        let w = 2.0 * std::f64::consts::PI * cfg.speed / (lo * hi).sqrt();
+        (w.is_finite() && w > 0.0).then_some(w)
+    });
+    d.omega_r.or(excited).unwrap_or_else(|| {
         let (lo, hi) = locals.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), l| {
             (lo.min(l.mode.omega), hi.max(l.mode.omega))
         });
