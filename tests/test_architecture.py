@@ -178,8 +178,109 @@ def test_old_module_paths_warn_and_are_the_new_modules():
         assert any(issubclass(w.category, DeprecationWarning) and new in str(w.message) for w in caught), old
     assert callable(vtb.simulate) and callable(vtb.optimize) and callable(vtb.spans) and callable(vtb.trains)
     quiet = subprocess.run([sys.executable, "-W", "error::DeprecationWarning", "-c", "import vtb, vtb.cli"], capture_output=True, text=True,
-                           env={**os.environ, "PYTHONPATH": str(PACKAGE.parent)})
+                           env={**os.environ, "PYTHONPATH": str(Path(vtb.__file__).resolve().parent.parent)})
     assert quiet.returncode == 0, quiet.stderr
 
 
 # -------------------------------------------------------------------------------------- Rust
+
+RUST = ROOT / "rust" / "src"
+#: The core's trades from the ground up: each may import only those below it (docs/architecture.md).
+#: `error` is everyone's; `config` and `linalg` stand on it alone; `library` builds
+#: configurations.
+TRADES = {
+    "error": 0,
+    "config": 1,
+    "linalg": 1,
+    "library": 2,
+    "model": 2,
+    "outputs": 3,
+    "check": 4,
+    "engine": 5,
+}
+
+
+def _rust_files():
+    return sorted(p for p in RUST.rglob("*.rs") if p.name not in ("lib.rs", "tests.rs"))
+
+
+def _trade(path: Path) -> str:
+    return path.relative_to(RUST).parts[0].removesuffix(".rs")
+
+
+def _code(path: Path) -> str:
+    """The file without its test module and comments (tests may use any trade)."""
+    text = path.read_text()
+    cut = text.find("#[cfg(test)]")
+    return "\n".join(line.split("//")[0] for line in (text[:cut] if cut >= 0 else text).splitlines())
+
+
+def _rust_imports():
+    """(file, its trade, the trade it names) of every `crate::trade` path outside tests."""
+    import re
+
+    for p in _rust_files():
+        for used in set(re.findall(r"crate::([a-z_]+)", _code(p))):
+            yield p, _trade(p), used
+
+
+def test_every_rust_file_belongs_to_a_trade():
+    assert {_trade(p) for p in _rust_files()} <= set(TRADES), sorted({_trade(p) for p in _rust_files()} - set(TRADES))
+
+
+def test_no_core_folder_imports_one_above_it():
+    """No upward import between the core's folders (an import within a folder is its own
+    business; the `wide` macro of linalg is exported at the crate's root)."""
+    upward = sorted(f"{p.relative_to(ROOT)}: {trade} -> {used}" for p, trade, used in _rust_imports()
+                    if used in TRADES and used != trade and TRADES[used] >= TRADES[trade])
+    assert not upward, "imports that run up or sideways:\n" + "\n".join(upward)
+
+
+def test_the_rust_rule_sees_an_upward_import(tmp_path):
+    """The detector on a made-up file: config naming the engine is found."""
+    import re
+
+    text = "use crate::engine::MAX_LANES;\n#[cfg(test)]\nmod tests { use crate::library::presets; }\n"
+    names = set(re.findall(r"crate::([a-z_]+)", text[: text.find("#[cfg(test)]")]))
+    assert names == {"engine"} and TRADES["engine"] > TRADES["config"]
+
+
+def _rust_functions(path: Path):
+    """(name, lines) of every function with a body, outside the test module."""
+    import re
+
+    lines = _code(path).splitlines()
+    head = re.compile(r"^(\s*)(pub(\([a-z]+\))? )?(const )?(unsafe )?fn (\w+)")
+    for i, line in enumerate(lines):
+        m = head.match(line)
+        if not m:
+            continue
+        k = i
+        while not lines[k].rstrip().endswith(("{", ";")):
+            k += 1
+        if lines[k].rstrip().endswith(";"):
+            continue  # a declaration
+        end = next(j for j in range(k + 1, len(lines)) if lines[j] == m.group(1) + "}")
+        yield m.group(6), end - i + 1
+
+
+@pytest.mark.parametrize("path", _rust_files(), ids=lambda p: str(p.relative_to(RUST)))
+def test_no_rust_file_above_700_lines_and_no_function_above_120(path):
+    assert len(_code(path).splitlines()) <= MAX_LINES
+    long = [(n, k) for n, k in _rust_functions(path) if k > MAX_FUNCTION_LINES]
+    assert not long, long
+
+
+def test_the_docs_name_files_that_exist():
+    """Every source path a doc names (rust/src/…, python/vtb/…, tests/…, benches/….py) exists:
+    the docs follow the code when it moves."""
+    import re
+
+    docs = sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md", ROOT / "CONTRIBUTING.md"]
+    missing = []
+    for d in docs:
+        for m in re.finditer(r"(rust/src/[\w/.]+|python/vtb/[\w/.]+|tests/[\w/]+\.py|benches/[\w/]+\.(?:py|rs))", d.read_text()):
+            path = m.group(1).rstrip(".")
+            if "new_model" not in path and not (ROOT / path).exists():
+                missing.append(f"{d.name}: {path}")
+    assert not missing, missing

@@ -43,3 +43,14 @@ def test_an_unknown_index_is_refused_naming_it():
     with pytest.raises(vtb.ConfigError) as e:
         vtb.simulate(cfg)
     assert e.value.field == "output.indices[1]" and "deck_acc_rms" in str(e.value)
+
+
+def test_the_docs_index_table_is_the_catalogue():
+    """docs/indices.md's table is generated from the core's catalogue: every kind of index is
+    documented, with the unit and band the core uses."""
+    from pathlib import Path
+
+    from vtb.run.indices import catalog_table
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "indices.md").read_text()
+    assert catalog_table() in page

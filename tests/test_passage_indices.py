@@ -84,3 +84,12 @@ def test_the_deck_band_follows_en_1990_from_the_deck_modes():
     bad.output.deck_band = 1e6
     with pytest.raises(vtb.ConfigError, match="output.deck_band"):
         bad.validate()
+
+
+def test_deck_deflection_is_the_bottom_layers_peak_displacement(two_cars):
+    """deck_disp_max (EN 1990 A2.4.4.3's deflection) is the peak |displacement| of the bottom
+    layer's record at the first observation point, read from the record itself."""
+    cfg, res = two_cars
+    want = np.abs(res.displacement(res.layer_names[-1])).max()
+    assert res.metrics()["deck_disp_max"] == want
+    assert vtb.run.indices.kind_of("deck_disp_max").unit == "m"

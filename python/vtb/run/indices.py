@@ -58,6 +58,14 @@ def kind_of(name: str) -> IndexKind:
     raise config_error("metric", name, "no such metric")
 
 
+def catalog_table() -> str:
+    """The catalogue as the Markdown table of docs/indices.md (one row per kind of index)."""
+    rows = ["| index | unit | of | band | meaning |", "|---|---|---|---|---|"]
+    cell = lambda text: text.replace("|", "\\|")  # noqa: E731 - a table cell holds no bare bar
+    rows += [f"| `{k.pattern}` | {k.unit} | {k.subject} | {k.band} | {cell(k.description)} |" for k in index_catalog()]
+    return "\n".join(rows) + "\n"
+
+
 def metric_unit(name: str) -> str:
     """The unit of a metric (``"m/s²"`` for ``rail_acc_max``), from the core's catalogue."""
     return kind_of(name).unit

@@ -176,6 +176,15 @@ pub const CATALOG: &[IndexKind] = &[
         present: deck,
     },
     IndexKind {
+        pattern: "deck_disp_max",
+        unit: "m",
+        subject: Subject::Deck,
+        band: Band::Raw,
+        description: "peak |displacement| of the bottom layer (static deflection included): the \
+                      deck's deflection for EN 1990 A2.4.4.3",
+        present: deck,
+    },
+    IndexKind {
         pattern: "car_disp_max",
         unit: "m",
         subject: Subject::Car,
@@ -368,7 +377,9 @@ pub fn index_layers(cfg: &Config) -> Vec<usize> {
         Some(names) => (0..layers.len())
             .filter(|&li| {
                 names.iter().any(|n| {
-                    layer_of_index(n, &layers[li].name) || (n == DECK && li + 1 == layers.len())
+                    layer_of_index(n, &layers[li].name)
+                        || (li + 1 == layers.len()
+                            && kind_of(cfg, n).is_some_and(|k| k.subject == Subject::Deck))
                 })
             })
             .collect(),

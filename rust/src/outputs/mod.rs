@@ -198,6 +198,10 @@ impl RunResult {
             let a = low_pass(&self.layer_acc(d, 0), self.deck_band, self.dt);
             m.insert(DECK.to_string(), amplitude(&a[steps.clone()]));
         }
+        if let Some(d) = self.deck.filter(|_| self.wants("deck_disp_max")) {
+            let u = &self.layer_disp(d, 0)[steps.clone()];
+            m.insert("deck_disp_max".to_string(), amplitude(u));
+        }
         self.contact_metrics(&steps, &mut m);
         for j in 0..self.n_pads {
             let f = &Self::column(&self.pad_force, self.n_pads, j)[steps.clone()];
