@@ -1,7 +1,6 @@
 //! A synthesis run's records made of its readouts, and the dampers' port equations.
 
-use super::run::{DamperLane, READOUTS};
-use crate::error::VtbError;
+use super::run::READOUTS;
 use crate::outputs::RunResult;
 use crate::outputs::catalog::Pad;
 
@@ -77,26 +76,4 @@ pub(super) fn records(
             r.pad_force[s * np + p] = pad.force(uu - ul, vu - vl);
         }
     }
-}
-
-/// (I + diag(κ)·G_dd)⁻¹ of one lane's dampers (constant over the run: fixed ports), and the
-/// lane's error when it is singular or not finite.
-pub(super) fn damper_inverse(dampers: &[DamperLane], g_dd: &[f64]) -> (Vec<f64>, Option<VtbError>) {
-    let nd = dampers.len();
-    if nd == 0 {
-        return (Vec::new(), None);
-    }
-    let s = faer::Mat::<f64>::from_fn(nd, nd, |e, f| {
-        f64::from(u8::from(e == f)) + dampers[e].kappa * g_dd[e * nd + f]
-    });
-    let inv = faer::linalg::solvers::DenseSolveCore::inverse(&s.partial_piv_lu());
-    let out: Vec<f64> = (0..nd * nd).map(|i| inv[(i / nd, i % nd)]).collect();
-    let error = (!out.iter().all(|x| x.is_finite())).then(|| {
-        VtbError::Solver(
-            "the dampers' port equations are singular or overflow: parameters of extreme \
-             magnitude"
-                .into(),
-        )
-    });
-    (out, error)
 }

@@ -25,7 +25,6 @@
 //! dampers); `records` assembles them with the rail residual's acceleration.
 
 use super::kernels::{self, Acc, CVec, RailStepCompliance, Scratch};
-use super::records::damper_inverse;
 use super::step::Coefficients;
 use super::{Gains, Reduction};
 use crate::config::DamperParams;
@@ -143,6 +142,28 @@ impl DamperLane {
             ..Default::default()
         }
     }
+}
+
+/// (I + diag(κ)·G_dd)⁻¹ of one lane's dampers (constant over the run: fixed ports), and the
+/// lane's error when it is singular or not finite.
+fn damper_inverse(dampers: &[DamperLane], g_dd: &[f64]) -> (Vec<f64>, Option<VtbError>) {
+    let nd = dampers.len();
+    if nd == 0 {
+        return (Vec::new(), None);
+    }
+    let s = faer::Mat::<f64>::from_fn(nd, nd, |e, f| {
+        f64::from(u8::from(e == f)) + dampers[e].kappa * g_dd[e * nd + f]
+    });
+    let inv = faer::linalg::solvers::DenseSolveCore::inverse(&s.partial_piv_lu());
+    let out: Vec<f64> = (0..nd * nd).map(|i| inv[(i / nd, i % nd)]).collect();
+    let error = (!out.iter().all(|x| x.is_finite())).then(|| {
+        VtbError::Solver(
+            "the dampers' port equations are singular or overflow: parameters of extreme \
+             magnitude"
+                .into(),
+        )
+    });
+    (out, error)
 }
 
 /// A lane's own data on the structure side.
