@@ -1,7 +1,7 @@
 """Bit-for-bit fingerprints of named runs: a refactoring that must not change a result runs this
 with the old build and the new one and compares the two files.
 
-    python benches/fingerprints.py --out new.json [--compare old.json] [--only NAME ...]
+    python benches/fingerprints.py --out new.json [--compare old.json] [--only NAME ...] [--drop-indices NAME ...]
 
 Each case hashes (SHA-256) every array of its results and its metrics' exact bits, so two
 builds agree on a case only if they give the same bits. The cases cover both engines (Newmark
@@ -52,9 +52,20 @@ def digest(*items) -> str:
     return h.hexdigest()
 
 
+#: Indices left out of the metrics' digest (``--drop-indices``): those the old build does not
+#: have, so that the rest compare bit for bit.
+DROPPED = set()
+
+
+def metrics_digest(batch: list) -> str:
+    """A batch's metric dicts, without the dropped indices."""
+    return digest([{k: v for k, v in m.items() if k not in DROPPED} for m in batch])
+
+
 def result_digest(r) -> str:
+    metrics = {k: v for k, v in r.metrics().items() if k not in DROPPED}
     return digest(r.t, r.disp, r.acc, r.vehicle_disp, r.vehicle_acc, r.contact_force,
-                  [tuple(e) for e in r.contact_loss], r.metrics())
+                  [tuple(e) for e in r.contact_loss], metrics)
 
 
 def short(t_end=0.04, **kw):
@@ -160,7 +171,7 @@ def case_batch_three_lanes():
         x = c.copy()
         x.tids.inertance, x.tids.stiffness, x.tids.damping = b, k, d
         cs.append(x)
-    return digest(vtb.simulate_batch(cs, progress=False, lanes=4))
+    return metrics_digest(vtb.simulate_batch(cs, progress=False, lanes=4))
 
 
 def case_batch_histories():
@@ -188,7 +199,7 @@ def case_synthesis_batch():
         x = c.copy()
         x.tids.inertance = b
         cs.append(x)
-    return digest(vtb.simulate_batch(cs, progress=False))
+    return metrics_digest(vtb.simulate_batch(cs, progress=False))
 
 
 def case_synthesis_train_zones():
@@ -253,8 +264,10 @@ def main(argv=None):
     ap.add_argument("--out", required=True)
     ap.add_argument("--compare")
     ap.add_argument("--only", nargs="*")
+    ap.add_argument("--drop-indices", nargs="*", default=[], help="indices added since the old build (e.g. deck_disp_max)")
     ap.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "vtb-fingerprint-cache"))
     a = ap.parse_args(argv)
+    DROPPED.update(a.drop_indices)
     os.environ.setdefault("VTB_CACHE", a.cache)
     try:
         try:
