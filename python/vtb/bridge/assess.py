@@ -102,6 +102,8 @@ def prepare(config: Config, settings: BridgeCheck) -> tuple:
     damping = code_damping(settings.bridge_type, settings.span, settings.interaction)
     cfg = apply_code_damping(with_band(config, band), damping, n0, band)
     cfg.solver.dt = float(settings.dt) if settings.dt is not None else 1.0 / (STEPS_PER_BAND_PERIOD * band)
+    if len(cfg.structure.layers) > 1:
+        cfg.output.band_limit = None  # the scan records the deck's indices only, low-passed at output.deck_band
     in_band = freqs[freqs <= band]
     return cfg, n0, freqs, band, damping, achieved_ratios(cfg.structure.layers[-1].damping, in_band)
 
