@@ -157,6 +157,8 @@ def checks_of(a: Assessment) -> list:
     failed = int(np.sum(a.scan.columns["error"] != ""))
     if failed:
         out.append(Check("runs", "—", float(failed), 0.0, "runs", False, note=f"{failed} of {len(a.scan)} runs failed; see the envelopes' error column"))
+    if failed == len(a.scan):
+        return out
     gov = a.scan.governing("acc")
     out.append(verdict("deck acceleration", "EN 1990 A2.4.4.2.1(4)P; EN 1991-2 §6.4.6.5", gov["acc"], acceleration_limit(s.track), "m/s²",
                        f"{gov['train']} ({gov['bound']})", gov["speed"], note=f"in the band up to {a.band:.3g} Hz at the observation point"))

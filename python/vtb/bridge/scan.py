@@ -149,7 +149,8 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     (name → factor on the deck's density; default ``{"nominal": 1.0}``).
 
     ``band``: the check's band (Hz) the deck acceleration is low-passed at (default: the
-    configuration's ``output.deck_band``). ``share``: of each axle load on the modelled track
+    configuration's ``output.deck_band``; a single-layer model's ``output.band_limit`` is set
+    to it too, :func:`with_band`). ``share``: of each axle load on the modelled track
     (:meth:`LoadTrain.forces`). ``tail``: free vibration (s) recorded after the last axle has
     left. ``gap``: distance (m) of the first axle before the structure at t = 0 (the run starts
     unloaded, and each axle enters over the first support). ``out``: a directory; each (train, bound) study journals there as it runs
@@ -164,7 +165,7 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     bounds = dict(mass_bounds or {"nominal": 1.0})
     if not bounds:
         raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
-    base = with_band(config, band) if band is not None else config.copy()
+    base = with_band(config, band if band is not None else config.output.deck_band)
     acc, disp = deck_indices(base)
     directory = Path(out) if out is not None else None
     if directory is not None:
