@@ -81,8 +81,12 @@ def draw(a: Assessment, directory: Path) -> dict:
                 label = name if len(bounds) == 1 else f"{name} ({bound})"
                 scale = 1e3 if column == "disp" else 1.0
                 ax.plot(sel["speed"] * KMH, sel[column] * scale, STYLES[(i + j) % len(STYLES)], label=label, lw=0.8)
+        top = max([float(np.nanmax(a.scan.columns[column] * (1e3 if column == "disp" else 1.0)))] + [v for v, _, _ in limits[:1]])
         for value, text, style in limits:
-            ax.axhline(value, color="k", ls=style, lw=1.0, label=text)
+            if value <= 3 * top:
+                ax.axhline(value, color="k", ls=style, lw=1.0, label=text)
+            else:  # far above the curves: named, not drawn, so that they stay readable
+                ax.set_title(f"{text}: {value:.3g} {'mm' if column == 'disp' else 'm/s²'} (off scale)", loc="right")
         ax.axvline(a.settings.line_speed * KMH, color="0.5", lw=0.6, ls=":", label="line speed")
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel(ylabel)
