@@ -30,7 +30,7 @@ def test_the_site_builds_without_warnings(tmp_path):
 def test_every_example_is_on_the_examples_page():
     page = (ROOT / "docs" / "examples.md").read_text()
     scripts = sorted(p.name for p in EXAMPLES.glob("*.py"))
-    assert scripts == ["any_study.py", "comfort_check.py", "damper_design.py", "damper_kinds.py", "defect_impacts.py", "quarter_car.py", "receptance_check.py", "speed_study.py",
+    assert scripts == ["any_study.py", "bridge_check.py", "comfort_check.py", "damper_design.py", "damper_kinds.py", "defect_impacts.py", "quarter_car.py", "receptance_check.py", "speed_study.py",
                        "train_passage.py", "viaduct_passage.py"]
     for s in scripts:
         assert f"../examples/{s}" in page, s
@@ -151,3 +151,9 @@ def test_the_scaleout_page_gives_hand_started_workers_the_study_settings():
     text = (ROOT / "docs" / "scaleout.md").read_text()
     for k, v in dask_environment().items():
         assert f"{k}={v}" in text, k
+
+
+def test_bridge_check_example(tmp_path):
+    text = _run("bridge_check.py", "--quick", "--out", str(tmp_path))
+    assert "deck acceleration" in text and "Table 6.6" in text
+    assert (tmp_path / "report.md").is_file() and (tmp_path / "envelopes.csv").is_file()

@@ -54,6 +54,12 @@ from .article.tid_optimize import optimize
 from .studies.optimize import ParetoResult
 from .article.robust import DesignEvaluation, evaluate_design, evaluate_designs
 from .run.tables import metrics_table, read_parquet, to_parquet
+from .bridge.load_trains import LoadTrain, apply_load_train, load_train, load_trains
+from .bridge.damping import code_damping
+from .bridge.scan import ScanResult, scan_speeds, speed_scan
+from .bridge.settings import BridgeCheck
+from .bridge.assess import Assessment
+from .bridge.report import bridge_check
 
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
@@ -64,6 +70,8 @@ __all__ = [
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
     "metrics_table", "read_parquet", "to_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
     "train", "trains", "TrainInfo", "consist_extent", "track_zones", "bridge_extent",
+    "LoadTrain", "load_train", "load_trains", "apply_load_train", "code_damping", "scan_speeds", "speed_scan", "ScanResult",
+    "BridgeCheck", "Assessment", "bridge_check",
 ]
 
 

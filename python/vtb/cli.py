@@ -372,6 +372,23 @@ def cmd_study_grid(args) -> int:
     return 0
 
 
+def cmd_bridge_check(args) -> int:
+    """The EN 1991-2 §6.4.6 dynamic check of a configuration's bridge (docs/bridge-check.md)."""
+    from .bridge.report import bridge_check
+    from .bridge.settings import split_toml
+
+    cfg, check = split_toml(args.config)
+    _writable_dir(Path(args.out), "--out")
+    with study_executor(args) as executor:
+        res = bridge_check(cfg, check, args.out, executor=executor, threads=args.threads, progress=not args.no_progress,
+                           figures=not args.no_plot)
+    for c in res.checks:
+        state = {True: "pass", False: "FAIL", None: "not evaluated"}[c.passed]
+        print(f"{c.name:<38} {c.value:<10.4g} {c.unit:<5} limit {c.limit:<10.4g} {state}")
+    print(f"# {len(res.scan)} runs in {res.seconds:.1f} s; report {Path(args.out) / 'report.md'}")
+    return 0 if res.passed is not False else 1
+
+
 def scheduler(sp) -> None:
     """The ``--scheduler`` option of a study command."""
     sp.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster whose scheduler is at ADDRESS (tcp://host:8786; docs/scaleout.md); "
@@ -462,6 +479,16 @@ def build_parser() -> argparse.ArgumentParser:
     gr.add_argument("--no-progress", action="store_true", help="no progress bar")
     scheduler(gr)
     gr.set_defaults(func=cmd_study_grid)
+
+    bc = sub.add_parser("bridge-check", help="the EN 1991-2 §6.4.6 dynamic check of a bridge: HSLM and real trains over a speed scan, code damping, "
+                        "the EN 1990 A2 limits, a Markdown report with envelopes and figures (docs/bridge-check.md)")
+    bc.add_argument("config", metavar="CONFIG", help="TOML configuration with a [bridge_check] table (span, bridge_type, track, line_speed, …)")
+    bc.add_argument("--out", required=True, help="output directory (report.md, envelopes.csv/.parquet, figures; the scan's journals, so a re-run resumes)")
+    bc.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+    bc.add_argument("--no-progress", action="store_true", help="no progress bars")
+    bc.add_argument("--no-plot", action="store_true", help="no figures")
+    scheduler(bc)
+    bc.set_defaults(func=cmd_bridge_check)
     return p
 
 

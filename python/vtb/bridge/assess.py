@@ -1,0 +1,179 @@
+"""The bridge check from end to end: :func:`assess` takes a configuration and a
+:class:`~vtb.bridge.settings.BridgeCheck`, finds the deck's frequencies and band, damps it by
+the code, scans the trains over the speeds, computes the static responses, and returns the
+:class:`Assessment` — every check with its clause, governing case and margin."""
+
+from __future__ import annotations
+
+import math
+import time
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional, Union
+
+import numpy as np
+
+from ..config.fields import Config
+from ..errors import config_error
+from .checks import (SAFETY_DEFLECTION_RATIO, Check, FlowChart, acceleration_limit, dynamic_analysis_required, phi_2, phi_3,
+                     phi_irregularity, verdict)
+from .damping import CodeDamping, achieved_ratios, apply_code_damping, code_damping
+from .load_trains import load_train, resonant_speeds
+from .scan import ScanResult, scan_speeds, speed_scan, with_band
+from .settings import BridgeCheck
+from .static import deck_frequencies, influence_line
+
+#: Resonance orders i of v_i = n0·D/i the scan refines around.
+ORDERS = range(1, 6)
+#: Time steps per period of the band's top frequency, by default.
+STEPS_PER_BAND_PERIOD = 100
+
+
+@dataclass
+class TrainEnvelope:
+    """One train's result over the scan: ``static`` (its static deflection at the point, m),
+    ``dynamic`` (largest dynamic deflection, m) at ``speed`` (m/s), ``phi_dyn`` (φ'dyn =
+    dynamic/static − 1, −), ``phi_irr`` (φ'', −, at the line's maximum speed), ``design`` ((1 +
+    φ'dyn + φ''·k)·static, m, k = ½ for carefully maintained track, 1 otherwise)."""
+
+    train: str
+    static: float
+    dynamic: float
+    speed: float
+    phi_dyn: float
+    phi_irr: float
+    design: float
+
+
+@dataclass
+class Assessment:
+    """A finished bridge check. ``settings`` and ``config`` (the damped, banded configuration
+    the scan ran); ``n0`` (Hz), ``frequencies`` (the deck's distinct natural frequencies, Hz),
+    ``band`` (Hz); ``damping`` (the code's) with its ``achieved`` ratios (−) at ``frequencies``
+    in the band; ``flow_chart``; ``scan``; ``lm71`` (static deflection under α·LM71, m) and
+    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time."""
+
+    settings: BridgeCheck
+    config: Config
+    n0: float
+    frequencies: np.ndarray
+    band: float
+    damping: CodeDamping
+    achieved: np.ndarray
+    flow_chart: FlowChart
+    scan: ScanResult
+    lm71: float
+    phi: float
+    envelopes: list
+    checks: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def passed(self) -> Optional[bool]:
+        """True when every evaluated check passed, False when one failed."""
+        states = [c.passed for c in self.checks if c.passed is not None]
+        return all(states) if states else None
+
+
+def deck_band_of(frequencies: np.ndarray, n0: float) -> float:
+    """max(30 Hz, 1.5·n0, n3) of EN 1990 A2.4.4.2.1(4)P (n3: the deck's third frequency)."""
+    third = frequencies[2] if len(frequencies) >= 3 else 0.0
+    return float(max(30.0, 1.5 * n0, third))
+
+
+def _frequencies(config: Config) -> np.ndarray:
+    f = deck_frequencies(config, 120.0)
+    if len(f) < 3 and len(f) >= 1:
+        f = deck_frequencies(config, 12.0 * f[0])
+    if len(f) == 0:
+        raise config_error("structure", "no deck mode below 120 Hz", "the deck's first bending frequency cannot be found: give bridge_check.n0")
+    return f
+
+
+def prepare(config: Config, settings: BridgeCheck) -> tuple:
+    """(configuration to scan, n0, deck frequencies, band, damping, achieved ratios)."""
+    settings.validate()
+    if not config.structure.layers:
+        raise config_error("structure.layers", [], "the bridge check needs a deck")
+    freqs = _frequencies(config)
+    n0 = float(settings.n0) if settings.n0 is not None else float(freqs[0])
+    band = float(settings.band) if settings.band is not None else deck_band_of(freqs, n0)
+    damping = code_damping(settings.bridge_type, settings.span, settings.interaction)
+    cfg = apply_code_damping(with_band(config, band), damping, n0, band)
+    cfg.solver.dt = float(settings.dt) if settings.dt is not None else 1.0 / (STEPS_PER_BAND_PERIOD * band)
+    if len(cfg.structure.layers) > 1:
+        cfg.output.band_limit = None  # the scan records the deck's indices only, low-passed at output.deck_band
+    in_band = freqs[freqs <= band]
+    return cfg, n0, freqs, band, damping, achieved_ratios(cfg.structure.layers[-1].damping, in_band)
+
+
+def assess(config: Config, settings: BridgeCheck, out: Union[str, Path, None] = None, executor: Optional[Executor] = None,
+           threads: Optional[int] = None, progress: bool = True) -> Assessment:
+    """Runs the check (``out``: a directory the scan journals in, so a re-run resumes)."""
+    t0 = time.perf_counter()
+    cfg, n0, freqs, band, damping, achieved = prepare(config, settings)
+    trains = [load_train(t) for t in settings.trains]
+    v_max = 1.2 * settings.line_speed
+    resonances = [v for t in trains if t.spacing for f in mass_frequencies(n0, settings.mass_bounds) for v in resonant_speeds(f, t.spacing, v_max, ORDERS)]
+    speeds = scan_speeds(settings.v_min, v_max, settings.step, resonances)
+    scan = speed_scan(cfg, trains, speeds, band=band, mass_bounds=settings.mass_bounds, share=settings.share, tail=settings.tail,
+                      out=None if out is None else Path(out) / "journals", executor=executor, threads=threads, progress=progress)
+    line = influence_line(cfg)
+    l_phi = float(settings.l_phi or settings.span)
+    phi = phi_2(l_phi) if settings.maintenance == "careful" else phi_3(l_phi)
+    lm71 = line.lm71(settings.alpha, settings.share)
+    k_irr = 0.5 if settings.maintenance == "careful" else 1.0
+    envelopes = []
+    for t in trains:
+        sel = scan.select(train=t.name)
+        ok = np.isfinite(sel["disp"])
+        static = line.train(t, settings.share)
+        if not ok.any():
+            envelopes.append(TrainEnvelope(t.name, static, math.nan, math.nan, math.nan, math.nan, math.nan))
+            continue
+        i = int(np.argmax(np.where(ok, sel["disp"], -np.inf)))
+        phi_dyn = max(0.0, float(sel["disp"][i]) / static - 1.0)
+        irr = phi_irregularity(l_phi, n0, settings.line_speed)
+        envelopes.append(TrainEnvelope(t.name, static, float(sel["disp"][i]), float(sel["speed"][i]), phi_dyn, irr,
+                                       (1.0 + phi_dyn + k_irr * irr) * static))
+    result = Assessment(settings, cfg, n0, freqs, band, damping, achieved,
+                        dynamic_analysis_required(settings.span, n0, settings.line_speed, settings.simple_structure, settings.continuous),
+                        scan, lm71, phi, envelopes)
+    result.checks = checks_of(result)
+    result.seconds = time.perf_counter() - t0
+    return result
+
+
+def mass_frequencies(n0: float, bounds: dict) -> list:
+    """n0 of each mass bound: n0/√factor (the deck's stiffness kept)."""
+    return [n0 / math.sqrt(f) for f in bounds.values()]
+
+
+def checks_of(a: Assessment) -> list:
+    """The checks of an assessment, each with its clause."""
+    s = a.settings
+    out = []
+    failed = int(np.sum(a.scan.columns["error"] != ""))
+    if failed:
+        out.append(Check("runs", "—", float(failed), 0.0, "runs", False, note=f"{failed} of {len(a.scan)} runs failed; see the envelopes' error column"))
+    if failed == len(a.scan):
+        return out
+    gov = a.scan.governing("acc")
+    out.append(verdict("deck acceleration", "EN 1990 A2.4.4.2.1(4)P; EN 1991-2 §6.4.6.5", gov["acc"], acceleration_limit(s.track), "m/s²",
+                       f"{gov['train']} ({gov['bound']})", gov["speed"], note=f"in the band up to {a.band:.3g} Hz at the observation point"))
+    worst = max((e for e in a.envelopes if math.isfinite(e.design)), key=lambda e: e.design, default=None)
+    limit = a.phi * a.lm71
+    if worst is not None:
+        out.append(verdict("dynamic envelope within Φ·LM71", "EN 1991-2 §6.4.6.5(3), eq. (6.15)", worst.design, limit, "m", worst.train, worst.speed,
+                           note="deflection at the observation point; where it exceeds Φ·α·LM71 the dynamic envelope governs the design"))
+    out.append(verdict("deck deflection, traffic safety", "EN 1990 A2.4.4.2.3(1)", limit, s.span / SAFETY_DEFLECTION_RATIO, "m", "LM71 × Φ × α",
+                       note="δ ≤ L/600"))
+    if s.comfort_ratio is not None:
+        comfort = a.phi * a.lm71 / s.alpha
+        out.append(verdict("deck deflection, passenger comfort", "EN 1990 A2.4.4.3.2 (Fig. A2.3)", comfort, s.span / s.comfort_ratio, "m", "LM71 × Φ (α = 1)",
+                           note=f"L/δ = {s.comfort_ratio:g} read from Fig. A2.3"))
+    else:
+        out.append(Check("deck deflection, passenger comfort", "EN 1990 A2.4.4.3.2 (Fig. A2.3)", a.phi * a.lm71 / s.alpha, math.nan, "m", None,
+                         "LM71 × Φ (α = 1)", note="not evaluated: give bridge_check.comfort_ratio (L/δ of Fig. A2.3 for the span and speed)"))
+    return out

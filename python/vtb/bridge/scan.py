@@ -1,0 +1,195 @@
+"""Speed scans of EN 1991-2 §6.4.6.2: every load train over a range of speeds, for each bound of
+the deck's mass, as a study of vtb (journaled, resumable, on any executor).
+
+:func:`scan_speeds` makes the speeds: from a low speed to 1.2 × the line's maximum
+(§6.4.6.2(1)) in steps no coarser than ``step``, with a finer step around each resonant speed
+v_i = n0·D/i of each train that falls in the range (§6.4.6.2(3): the peak responses at the
+resonant speeds must be found). :func:`speed_scan` runs them: one :func:`vtb.study` per train
+and mass bound, over the speed, reporting the deck's peak acceleration in the check's band and
+its peak deflection at the configuration's first observation point.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from ..config.fields import Config
+from ..errors import config_error
+from ..run.tables import frame, to_parquet
+from ..studies.grid import study
+from .load_trains import LoadTrain, apply_load_train, load_train
+
+#: Largest speed step (m/s) of a scan: 10 km/h.
+MAX_STEP = 10.0 / 3.6
+#: The deck's indices a scan records: (acceleration in the band, deflection), per layer count.
+DECK_INDICES = ("deck_acc_max", "deck_disp_max")
+
+
+def _positive(name: str, v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v) or v <= 0:
+        raise config_error(name, v, "must be a finite number > 0")
+    return float(v)
+
+
+def scan_speeds(v_min: float, v_max: float, step: float = MAX_STEP, resonances: Sequence[float] = (),
+                fine_step: Optional[float] = None, fine_width: Optional[float] = None) -> np.ndarray:
+    """Speeds (m/s) from ``v_min`` to ``v_max`` every ``step`` (at most 10 km/h), plus every
+    ``fine_step`` (default step/5) within ``fine_width`` (default 2·step) of each resonant speed
+    in range, and the resonant speeds themselves."""
+    lo, hi, st = _positive("v_min", v_min), _positive("v_max", v_max), _positive("step", step)
+    if hi <= lo:
+        raise config_error("v_max", v_max, f"must exceed v_min = {v_min:g} m/s")
+    if st > MAX_STEP + 1e-12:
+        raise config_error("step", step, f"must be at most {MAX_STEP:.4g} m/s (10 km/h, EN 1991-2 §6.4.6.2)")
+    fine = _positive("fine_step", fine_step) if fine_step is not None else st / 5
+    width = _positive("fine_width", fine_width) if fine_width is not None else 2 * st
+    n = int(math.floor((hi - lo) / st + 1e-9))
+    speeds = [lo + i * st for i in range(n + 1)] + [hi]
+    for r in resonances:
+        if lo <= r <= hi:
+            k = int(math.floor(width / fine))
+            speeds += [r + j * fine for j in range(-k, k + 1) if lo <= r + j * fine <= hi]
+    out = np.unique(np.round(np.asarray(speeds, dtype=float), 9))
+    return out
+
+
+def deck_indices(config: Config) -> tuple:
+    """The (acceleration, deflection) index names of the deck of ``config``: the deck's own
+    (``deck_acc_max``, ``deck_disp_max``: the bottom layer, the acceleration low-passed at
+    ``output.deck_band``) when the structure has several layers, else the single layer's
+    (``{layer}_acc_max`` low-passed at ``output.band_limit``, ``{layer}_disp_max``)."""
+    if len(config.structure.layers) > 1:
+        return DECK_INDICES
+    name = config.structure.layers[0].name
+    return (f"{name}_acc_max", f"{name}_disp_max")
+
+
+def with_band(config: Config, band: float) -> Config:
+    """``config`` whose deck acceleration is low-passed at ``band`` (Hz): ``output.deck_band``,
+    and for a single layer ``output.band_limit`` too."""
+    out = config.copy()
+    out.output.deck_band = float(band)
+    if len(out.structure.layers) == 1:
+        out.output.band_limit = float(band)
+    return out
+
+
+def with_mass(config: Config, factor: float) -> Config:
+    """``config`` whose deck (bottom layer) is ``factor`` times as heavy (its density scaled;
+    its stiffness kept): a bound of the deck's mass (ballast density and depth)."""
+    out = config.copy()
+    out.structure.layers[-1].density *= _positive("mass_bounds", factor)
+    return out
+
+
+@dataclass
+class ScanResult:
+    """A finished scan. ``columns``: numpy arrays ``train`` (name), ``bound`` (the mass bound's
+    name), ``speed`` (m/s), ``acc`` (the deck's peak acceleration in the check's band, m/s²),
+    ``disp`` (its peak deflection, m, static part included), ``error`` (empty, or why the run
+    failed). ``indices``: the run indices ``acc`` and ``disp`` were read from; ``journals``:
+    the study journal of each (train, bound)."""
+
+    columns: dict
+    indices: tuple
+    journals: dict
+
+    def __len__(self) -> int:
+        return len(self.columns["speed"])
+
+    def select(self, train: Optional[str] = None, bound: Optional[str] = None) -> dict:
+        """The columns of one train and/or bound, ordered by speed."""
+        mask = np.ones(len(self), bool)
+        if train is not None:
+            mask &= self.columns["train"] == train
+        if bound is not None:
+            mask &= self.columns["bound"] == bound
+        order = np.argsort(self.columns["speed"][mask], kind="stable")
+        return {k: v[mask][order] for k, v in self.columns.items()}
+
+    def governing(self, column: str) -> dict:
+        """The run with the largest ``column`` (``"acc"`` or ``"disp"``): its train, bound,
+        speed (m/s) and value."""
+        ok = self.columns["error"] == ""
+        if not ok.any():
+            raise config_error("scan", "all runs failed", "no successful run to govern")
+        i = np.flatnonzero(ok)[np.nanargmax(self.columns[column][ok])]
+        return {k: (v[i].item() if hasattr(v[i], "item") else v[i]) for k, v in self.columns.items()}
+
+    def to_pandas(self):
+        """The columns as a DataFrame (units in ``attrs["units"]``; needs pandas)."""
+        return frame(self.columns, {"speed": "m/s", "acc": "m/s²", "disp": "m"})
+
+    def to_csv(self, path) -> None:
+        """CSV of the columns (numbers by ``repr``: exact round trip)."""
+        cols = ("train", "bound", "speed", "acc", "disp", "error")
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(cols)
+            for r in zip(*(self.columns[c] for c in cols)):
+                w.writerow([repr(float(v)) if k in ("speed", "acc", "disp") else str(v) for k, v in zip(cols, r)])
+
+    def to_parquet(self, path) -> None:
+        to_parquet(self.to_pandas(), path)
+
+
+def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: Sequence[float], *, band: Optional[float] = None,
+               mass_bounds: Optional[Mapping[str, float]] = None, share: float = 1.0, tail: float = 0.5, gap: float = 1.0,
+               out: Union[str, Path, None] = None, executor: Optional[Executor] = None, threads: Optional[int] = None,
+               progress: bool = True) -> ScanResult:
+    """Runs every train of ``trains`` (names or :class:`LoadTrain` s) as moving forces over
+    ``config`` at every speed of ``speeds`` (m/s), for each deck mass bound of ``mass_bounds``
+    (name → factor on the deck's density; default ``{"nominal": 1.0}``).
+
+    ``band``: the check's band (Hz) the deck acceleration is low-passed at (default: the
+    configuration's ``output.deck_band``; a single-layer model's ``output.band_limit`` is set
+    to it too, :func:`with_band`). ``share``: of each axle load on the modelled track
+    (:meth:`LoadTrain.forces`). ``tail``: free vibration (s) recorded after the last axle has
+    left. ``gap``: distance (m) of the first axle before the structure at t = 0 (the run starts
+    unloaded, and each axle enters over the first support). ``out``: a directory; each (train, bound) study journals there as it runs
+    (``{train}__{bound}.csv``) and a re-run resumes it. ``executor``/``threads``: as
+    :func:`vtb.study` (Dask's client's executor included)."""
+    loads = [load_train(t) for t in trains]
+    if not loads:
+        raise config_error("trains", trains, "needs at least one load train")
+    grid = [float(v) for v in np.atleast_1d(np.asarray(speeds, dtype=float))]
+    for i, v in enumerate(grid):
+        _positive(f"speeds[{i}]", v)
+    bounds = dict(mass_bounds or {"nominal": 1.0})
+    if not bounds:
+        raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
+    base = with_band(config, band if band is not None else config.output.deck_band)
+    acc, disp = deck_indices(base)
+    directory = Path(out) if out is not None else None
+    if directory is not None:
+        directory.mkdir(parents=True, exist_ok=True)
+    cols = {k: [] for k in ("train", "bound", "speed", "acc", "disp", "error")}
+    journals = {}
+    for bound, factor in bounds.items():
+        massed = with_mass(base, factor)
+        for t in loads:
+            cfg = apply_load_train(massed, t, share=share, tail=tail, gap=gap)
+            journal = directory / f"{_file_name(t.name)}__{_file_name(bound)}.csv" if directory is not None else None
+            res = study(cfg, cases=[{"speed": v} for v in grid], indices=[acc, disp], out=journal, executor=executor,
+                        threads=threads, progress=progress, desc=f"{t.name} ({bound})")
+            journals[(t.name, bound)] = None if journal is None else str(journal)
+            n = len(res)
+            cols["train"] += [t.name] * n
+            cols["bound"] += [bound] * n
+            cols["speed"] += list(res.columns["speed"])
+            cols["acc"] += list(res.columns[acc])
+            cols["disp"] += list(res.columns[disp])
+            cols["error"] += list(res.columns["error"])
+    columns = {k: np.asarray(v, dtype=float if k in ("speed", "acc", "disp") else str) for k, v in cols.items()}
+    return ScanResult(columns, (acc, disp), journals)
+
+
+def _file_name(text: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in str(text))

@@ -1,0 +1,103 @@
+"""Static responses of the structure for the bridge check: the deck's influence line at the
+observation point, the static deflection a load train or LM71 gives there, and the deck's
+natural frequencies.
+
+The influence line of the deck's deflection at x₀ for a unit force at x on the loaded layer is,
+by Maxwell's reciprocity, the loaded layer's deflection at x under a unit force on the deck at
+x₀: one solve of K u = s_deck(x₀), then G(x) = s_load(x)ᵀ u (K the assembled stiffness, s the
+shape vectors). Every static effect on it is a sum or an integral of G.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..analysis.eigen import assemble, layer_index, shape_matrix, spd_solver
+from ..analysis.track import modes
+from ..config.fields import Config
+from ..errors import config_error
+from .load_trains import LoadTrain
+
+#: LM71 of EN 1991-2 §6.3.2 (Fig. 6.2): four 250 kN axles 1.6 m apart and 80 kN/m beyond
+#: 0.8 m from the outer axles on either side, over any length where it is unfavourable.
+LM71_AXLES = (-2.4, -0.8, 0.8, 2.4)
+LM71_AXLE_LOAD = 250e3
+LM71_LINE_LOAD = 80e3
+LM71_CLEAR = 3.2
+
+
+@dataclass
+class InfluenceLine:
+    """G(x): the deck's deflection (m, positive down) at ``point`` (m) per newton of force at x
+    (m) on the loaded layer ``layer``, sampled at ``x`` every ``dx`` over the structure."""
+
+    x: np.ndarray
+    g: np.ndarray
+    point: float
+    layer: str
+    dx: float
+
+    def train(self, train: LoadTrain, share: float = 1.0) -> float:
+        """The largest static deflection (m) of the train over every position of its front axle
+        (every ``dx``, entering to leaving): max Σ P_k·G(x_front − x_k)."""
+        pos = np.asarray(train.positions)
+        loads = np.asarray(train.loads) * share
+        fronts = np.arange(self.x[0], self.x[-1] + train.length + self.dx, self.dx)
+        xs = fronts[:, None] - pos[None, :]
+        g = np.interp(xs, self.x, self.g, left=0.0, right=0.0)
+        return float(np.max(g @ loads))
+
+    def lm71(self, alpha: float = 1.0, share: float = 1.0) -> float:
+        """The largest static deflection (m) under LM71 × ``alpha``: the axle group at every
+        position, and the line load wherever G > 0 beyond 3.2 m from the group's centre."""
+        positive = np.clip(self.g, 0.0, None)
+        cum = np.concatenate(([0.0], np.cumsum(0.5 * (positive[1:] + positive[:-1]) * np.diff(self.x))))
+        best = 0.0
+        for c in self.x:
+            axles = LM71_AXLE_LOAD * np.sum(np.interp(c + np.asarray(LM71_AXLES), self.x, self.g, left=0.0, right=0.0))
+            lo, hi = np.interp(c - LM71_CLEAR, self.x, cum, left=0.0), np.interp(c + LM71_CLEAR, self.x, cum, right=cum[-1])
+            line = LM71_LINE_LOAD * (cum[-1] - (hi - lo))
+            best = max(best, axles + line)
+        return float(alpha * share * best)
+
+
+def influence_line(config: Config, point: Optional[float] = None, layer: Optional[str] = None, dx: float = 0.25) -> InfluenceLine:
+    """The influence line of the deck's (bottom layer's) static deflection at ``point`` (m;
+    default the first observation point) for a force on ``layer`` (default: the top layer, where
+    moving forces act)."""
+    system = assemble(config)
+    length = float(config.structure.length)
+    if point is None:
+        point = config.output.points[0] if config.output.points else length / 2
+    if not (isinstance(point, (int, float)) and 0 <= point <= length):
+        raise config_error("point", point, f"must lie on the structure, 0 ≤ x ≤ {length:g} m")
+    if not (isinstance(dx, (int, float)) and 0 < dx <= length):
+        raise config_error("dx", dx, "must be a step (m) > 0")
+    top = layer_index(system, layer if layer is not None else 0, "layer")
+    deck = len(system.layers) - 1
+    u = np.asarray(spd_solver(system.k).solve(np.asarray(shape_matrix(system, deck, np.array([float(point)])).todense()))).ravel()
+    x = np.linspace(0.0, length, int(math.ceil(length / dx)) + 1)
+    g = shape_matrix(system, top, x).T @ u
+    return InfluenceLine(x, np.asarray(g).ravel(), float(point), system.layers[top][0], float(x[1] - x[0]))
+
+
+def deck_frequencies(config: Config, fmax: float = 120.0, share: float = 0.5, cluster: float = 0.03) -> np.ndarray:
+    """The deck's distinct natural frequencies (Hz) below ``fmax``: the structure's modes whose
+    kinetic energy lies mostly (> ``share``) in the bottom layer, the near-equal ones of
+    identical spans (within ``cluster``, relative) counted once, at the lowest of each group."""
+    system = assemble(config)
+    found = modes(config, fmax)
+    _, first, count = system.layers[-1]
+    deck = slice(first, first + count)
+    phi = found.shapes[deck, :]
+    energy = np.einsum("ij,ij->j", phi, system.m.tocsr()[deck, deck] @ phi)
+    f = found.frequencies[(energy > share) & (found.frequencies > 0)]
+    out: list = []
+    for v in f:
+        if not out or v > out[-1] * (1 + cluster):
+            out.append(float(v))
+    return np.asarray(out)
