@@ -128,6 +128,11 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
     there — so no eigenvalue is counted twice or missed at a boundary, and the next shift never
     sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search. Raises
     :class:`EigshFailed` when ARPACK fails or a slice would need n − 1 eigenpairs.
+
+    Deterministic: every slice starts ARPACK from the same seeded vector (:func:`start_vector`;
+    ARPACK's own default is a random one, which made two builds of one structure differ at the
+    level of its convergence tolerance), and each eigenvector's sign is fixed by
+    :func:`fix_signs`, so the same matrices give the same bits in every process.
     """
     n = k.shape[0]
     block = min(EIGEN_BLOCK, n - 2)
@@ -137,7 +142,7 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
     b = start
     while True:
         try:
-            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM")
+            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM", v0=start_vector(n))
         except (spla.ArpackError, spla.ArpackNoConvergence, RuntimeError, ValueError):
             raise EigshFailed from None
         top = b + float(np.max(np.abs(lam - b)))
@@ -163,7 +168,29 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
         lams.append(lam[sel])
         phis.append(phi[:, sel])
         b = boundary
-    return np.concatenate(lams), np.concatenate(phis, axis=1)
+    return np.concatenate(lams), fix_signs(np.concatenate(phis, axis=1))
+
+
+#: Seed of :func:`start_vector`.
+START_SEED = 20240607
+
+
+def start_vector(n: int) -> np.ndarray:
+    """ARPACK's start vector for an n-DOF problem: the same pseudo-random vector every time."""
+    return np.random.default_rng(START_SEED).standard_normal(n)
+
+
+def fix_signs(vectors: np.ndarray) -> np.ndarray:
+    """``vectors`` (n × k, real or complex) with each column multiplied by ±1 so that its entry of
+    largest modulus (the first such) has a positive real part (or, if that is zero, a positive
+    imaginary part): an eigenvector's sign is arbitrary, this picks one in every process."""
+    if vectors.size == 0:
+        return vectors
+    rows = np.argmax(np.abs(vectors), axis=0)
+    lead = vectors[rows, np.arange(vectors.shape[1])]
+    flip = np.where(lead.real != 0.0, lead.real < 0.0, np.imag(lead) < 0.0)
+    vectors[:, flip] *= -1.0
+    return vectors
 
 
 def spd_solver(k: sp.spmatrix):

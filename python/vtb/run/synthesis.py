@@ -41,8 +41,9 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
 
-from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, layer_index,
+from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, fix_signs, layer_index,
                               shape_matrix, sliced_eigsh, spd_solver)
 from ..config.fields import Config, structure_json
 from ..errors import SolverError, config_error
@@ -181,7 +182,17 @@ def _attachments(system, config: Config) -> np.ndarray:
 
 
 def build(config: Config, progress=None) -> Reduction:
-    """Computes the reduction of ``config``'s structure (no cache; see :func:`reduction`)."""
+    """Computes the reduction of ``config``'s structure (no cache; see :func:`reduction`).
+
+    Deterministic: the same configuration gives the same bits in every process. The eigensolver
+    starts from a fixed vector, every mode's sign is fixed (:func:`vtb.analysis.eigen.fix_signs`)
+    and the dense algebra runs on one BLAS thread: OpenBLAS splits its sums by thread count, so
+    two threads and one gave reductions differing in the last bits."""
+    with threadpool_limits(limits=1):
+        return _build(config, progress)
+
+
+def _build(config: Config, progress=None) -> Reduction:
     t0 = time.perf_counter()
     cfg = _structure_config(config)
     if cfg.discretisation.method != "fem":
@@ -226,7 +237,7 @@ def build(config: Config, progress=None) -> Reduction:
     order = np.lexsort((lam.imag, np.abs(lam)))
     lam, psi = lam[order], basis @ z[:, order]
     a = np.einsum("ij,ij->j", psi, 2.0 * lam[None, :] * (m @ psi) + c @ psi)
-    psi /= np.sqrt(a)[None, :]
+    psi = fix_signs(psi / np.sqrt(a)[None, :])  # the normalisation leaves a sign: fix it
     weight = np.where(lam.imag == 0, 1.0, 2.0)
     note("rail residual")
     rail = system.layers[0][2]
