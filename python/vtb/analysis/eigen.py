@@ -117,7 +117,7 @@ class EigshFailed(Exception):
     pass
 
 
-def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
+def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float, covered=None):
     """Every eigenpair of K φ = λ M φ with start ≤ λ ≤ hi, by spectrum slicing.
 
     Each slice factorises K − σM at a shift σ = b, the lower edge of the part not yet covered,
@@ -126,7 +126,8 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
     b are accepted up to a boundary placed in the middle of the widest gap between consecutive
     found eigenvalues in the upper half of the slice — a true gap, since the slice is complete
     there — so no eigenvalue is counted twice or missed at a boundary, and the next shift never
-    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search. Raises
+    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search; ``covered(b)``,
+    when given, is told the lower edge b of the part not yet covered after each slice. Raises
     :class:`EigshFailed` when ARPACK fails or a slice would need n − 1 eigenpairs.
 
     Deterministic: every slice starts ARPACK from the same seeded vector (:func:`start_vector`;
@@ -168,6 +169,8 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
         lams.append(lam[sel])
         phis.append(phi[:, sel])
         b = boundary
+        if covered is not None:
+            covered(b)
     return np.concatenate(lams), fix_signs(np.concatenate(phis, axis=1))
 
 
@@ -198,6 +201,15 @@ def spd_solver(k: sp.spmatrix):
     the columns of a matrix (8 per pass)."""
     kc = k.tocoo()
     return _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
+
+
+def structure_estimate(text: str, check: bool = False) -> dict:
+    """The core's estimate of a synthesis build of the configuration whose core JSON is ``text``
+    (:func:`vtb.run.synthesis.estimate`)."""
+    out = _core.synthesis_build(text, check)
+    if out is None:
+        raise config_error("discretisation.synthesis_cutoff", None, "the configuration does not ask for the synthesis of a finite-element structure")
+    return dict(out)
 
 
 def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_dofs: int, band: int, residual: np.ndarray):
