@@ -149,7 +149,7 @@ def test_a_build_beyond_the_memory_budget_is_refused_before_it_starts_within_a_s
     c = vtb.paper_config(model="fast")
     c.discretisation.synthesis_cutoff = 300.0
     c.solver.dt = 2e-4
-    c.irregularity = vtb.Irregularity(kind="none")
+    c.irregularity.wavelength_min = 0.04  # an irregularity over 1.9 km, not sampled before the refusal
     c = vtb.spans(c, [32.0] * 60)
     c.solver.t_end = 0.1
     t0 = time.perf_counter()

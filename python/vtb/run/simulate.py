@@ -19,7 +19,7 @@ from ..config.prepare import prepare
 from ..config.resolution import warn_beyond
 from ..errors import VtbError, config_error
 from .indices import metric_unit
-from .synthesis import in_memory, reduction
+from .synthesis import check_build, in_memory, reduction
 from .tables import frame, to_parquet
 
 
@@ -292,6 +292,8 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
     building = "auto" if callable(progress) else progress  # a reduction's build announces itself unless False
     if progress == "auto" and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
         progress = False
+    if isinstance(config, Config):
+        check_build(config)  # a build beyond the budget is refused before the profile is sampled
     text, profile = prepare(config)
     red = _reduction(config, building, text, profile.core_args())
     bar = None

@@ -323,6 +323,18 @@ def in_memory(config: Config) -> bool:
     return cache_key(config) in _MEMORY
 
 
+def check_build(config: Config) -> None:
+    """Before anything else of a run: when ``config``'s reduction is neither in this process
+    nor in the cache, its build's estimate against ``solver.memory_budget`` (a
+    :class:`~vtb.ConfigError` naming it), so that a build beyond the budget is refused before
+    even the irregularity is sampled."""
+    if config.discretisation.synthesis_cutoff is None or config.discretisation.method != "fem":
+        return
+    key = cache_key(config)
+    if key not in _MEMORY and not _path(key).exists():
+        estimate(config, check=True)
+
+
 def estimate(config: Config, check: bool = False) -> dict:
     """The core's estimate of what building ``config``'s reduction costs, from the
     configuration alone (docs/synthesis.md, "Before a build"): ``dofs``, ``basis_modes`` (a
