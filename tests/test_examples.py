@@ -9,7 +9,7 @@ import pytest
 import vtb
 from vtb import cli
 
-NAMES = ["article", "article_converged", "article_fem", "article_tids", "two_span_sato"]
+NAMES = ["article", "article_converged", "article_fast", "article_fem", "article_tids", "passage_fast", "two_span_sato"]
 
 
 def _close(a, b):
@@ -65,6 +65,16 @@ def test_converged_example_is_the_converged_preset():
         v.contact_patch = False
     assert conv.vehicles == art.vehicles and conv.speed == art.speed and conv.irregularity == art.irregularity
     assert [c.positions for c in conv.structure.couplings] == [c.positions for c in art.structure.couplings]
+
+
+def test_the_fast_examples_are_the_fast_preset_and_a_passage_on_it():
+    """The recommended model at both grades: the rail grade is the fast preset; the passage
+    runs the same structure by synthesis at 300 Hz over three spans between embankments."""
+    assert _close(vtb.example_config("article_fast").to_dict(), vtb.paper_config(model="fast", calibrated=True).to_dict())
+    p = vtb.example_config("passage_fast")
+    assert p.discretisation.synthesis_cutoff == 300.0 and p.solver.dt == 2e-4
+    assert vtb.resolved_band(p).rail.f_max >= p.output.band_limit
+    assert p.vehicles[0].x_front < 0 and p.structure.length == 156.0
 
 
 def test_unknown_example_names_the_field():

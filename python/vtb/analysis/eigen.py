@@ -117,7 +117,7 @@ class EigshFailed(Exception):
     pass
 
 
-def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
+def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float, covered=None):
     """Every eigenpair of K φ = λ M φ with start ≤ λ ≤ hi, by spectrum slicing.
 
     Each slice factorises K − σM at a shift σ = b, the lower edge of the part not yet covered,
@@ -126,8 +126,14 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
     b are accepted up to a boundary placed in the middle of the widest gap between consecutive
     found eigenvalues in the upper half of the slice — a true gap, since the slice is complete
     there — so no eigenvalue is counted twice or missed at a boundary, and the next shift never
-    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search. Raises
+    sits on an eigenvalue. The slice that reaches beyond ``hi`` ends the search; ``covered(b)``,
+    when given, is told the lower edge b of the part not yet covered after each slice. Raises
     :class:`EigshFailed` when ARPACK fails or a slice would need n − 1 eigenpairs.
+
+    Deterministic: every slice starts ARPACK from the same seeded vector (:func:`start_vector`;
+    ARPACK's own default is a random one, which made two builds of one structure differ at the
+    level of its convergence tolerance), and each eigenvector's sign is fixed by
+    :func:`fix_signs`, so the same matrices give the same bits in every process.
     """
     n = k.shape[0]
     block = min(EIGEN_BLOCK, n - 2)
@@ -137,7 +143,7 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
     b = start
     while True:
         try:
-            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM")
+            lam, phi = spla.eigsh(k, k=block, M=m, sigma=b, which="LM", v0=start_vector(n))
         except (spla.ArpackError, spla.ArpackNoConvergence, RuntimeError, ValueError):
             raise EigshFailed from None
         top = b + float(np.max(np.abs(lam - b)))
@@ -163,7 +169,31 @@ def sliced_eigsh(k: sp.csc_matrix, m: sp.csc_matrix, start: float, hi: float):
         lams.append(lam[sel])
         phis.append(phi[:, sel])
         b = boundary
-    return np.concatenate(lams), np.concatenate(phis, axis=1)
+        if covered is not None:
+            covered(b)
+    return np.concatenate(lams), fix_signs(np.concatenate(phis, axis=1))
+
+
+#: Seed of :func:`start_vector`.
+START_SEED = 20240607
+
+
+def start_vector(n: int) -> np.ndarray:
+    """ARPACK's start vector for an n-DOF problem: the same pseudo-random vector every time."""
+    return np.random.default_rng(START_SEED).standard_normal(n)
+
+
+def fix_signs(vectors: np.ndarray) -> np.ndarray:
+    """``vectors`` (n × k, real or complex) with each column multiplied by ±1 so that its entry of
+    largest modulus (the first such) has a positive real part (or, if that is zero, a positive
+    imaginary part): an eigenvector's sign is arbitrary, this picks one in every process."""
+    if vectors.size == 0:
+        return vectors
+    rows = np.argmax(np.abs(vectors), axis=0)
+    lead = vectors[rows, np.arange(vectors.shape[1])]
+    flip = np.where(lead.real != 0.0, lead.real < 0.0, np.imag(lead) < 0.0)
+    vectors[:, flip] *= -1.0
+    return vectors
 
 
 def spd_solver(k: sp.spmatrix):
@@ -171,6 +201,15 @@ def spd_solver(k: sp.spmatrix):
     the columns of a matrix (8 per pass)."""
     kc = k.tocoo()
     return _core.SpdSolver(int(k.shape[0]), kc.row.astype(np.int64), kc.col.astype(np.int64), kc.data)
+
+
+def structure_estimate(text: str, check: bool = False) -> dict:
+    """The core's estimate of a synthesis build of the configuration whose core JSON is ``text``
+    (:func:`vtb.run.synthesis.estimate`)."""
+    out = _core.synthesis_build(text, check)
+    if out is None:
+        raise config_error("discretisation.synthesis_cutoff", None, "the configuration does not ask for the synthesis of a finite-element structure")
+    return dict(out)
 
 
 def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_dofs: int, band: int, residual: np.ndarray):

@@ -22,7 +22,7 @@ import numpy as np
 from . import gateway
 from .fields import Config, check_types, to_plain
 from .irregularity import Irregularity
-from .resolution import real_or_none, resolved_band, warn_beyond
+from .resolution import check_excitation, real_or_none, resolved_band, warn_beyond
 from ..errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
@@ -59,6 +59,7 @@ def prepare(cfg: Config) -> tuple[str, SampledProfile]:
     cfg.irregularity.validate(speed=real_or_none(cfg.speed), dt=real_or_none(getattr(cfg.solver, "dt", None)),
                               wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
     _warn_band_limit(cfg, text)
+    _check_excitation(cfg, text)
     if any(q.kind == "wheel_flat" for q in (cfg.irregularity, *cfg.irregularity.parts)):
         gateway.validate(text)  # a flat is sampled on its vehicle's wheel: a bad wheel is named first
     return text, irregularity_profile(cfg, text)
@@ -86,6 +87,17 @@ def _warn_band_limit(cfg: Config, text: str) -> None:
                 warn_beyond(cfg, layer.name, top, f"output.band_levels ({max(bands):g} Hz band, {layer.name})", band=resolved)
     except (VtbError, AttributeError, TypeError):
         pass
+
+
+def _check_excitation(cfg: Config, text: str) -> None:
+    """Each irregularity part against the band the model resolves for the rail
+    (:func:`vtb.config.resolution.check_excitation`); a configuration the core refuses is
+    left to the run, which names the field."""
+    try:
+        band = resolved_band(cfg, text)
+    except (VtbError, AttributeError, TypeError):
+        return
+    check_excitation(cfg, band)
 
 
 #: Bytes of generated profiles this process keeps (the least recently used go first).

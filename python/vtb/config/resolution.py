@@ -12,6 +12,7 @@ the functions that answer at given frequencies (:func:`vtb.receptance`, :func:`v
 from __future__ import annotations
 
 import json
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Optional
@@ -20,6 +21,7 @@ import numpy as np
 
 from . import gateway
 from .fields import Config, structure_json
+from .irregularity import SPECTRA, band_variance
 from ..errors import config_error
 
 
@@ -130,3 +132,67 @@ def warn_beyond(config: Config, layer: str, f_top: float, what: str, stepped: bo
             ResolutionWarning,
             stacklevel=3,
         )
+
+
+#: The r.m.s. (m) of a stationary irregularity part's roughness at wavelengths the model does not
+#: resolve for the rail above which a run warns (:func:`check_excitation`): 4 % of the Hertz
+#: compression of a 70 kN wheel (76 μm), where the contact force's fluctuation from the
+#: unresolved part reaches about 6 % of the static load and its peaks can lift the wheel.
+OUT_OF_BAND_RMS = 3e-6
+
+
+def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> None:
+    """Every stationary irregularity part (a spectrum or a corrugation; the irregularity itself
+    when it has no parts) against the band the model resolves for the rail (docs/resolution.md,
+    "The irregularity against the grade"), before any set-up. A part whose excitation v/λ_min
+    reaches beyond the rail's ``f_max`` and whose roughness at wavelengths shorter than
+    v/f_max has an r.m.s. above :data:`OUT_OF_BAND_RMS` gives a :class:`ResolutionWarning`
+    naming the part, its band and what would take it: the grade (synthesis cut-off and time
+    step, or time step) that resolves v/λ_min, or the wavelength_min this grade takes."""
+    v = real_or_none(getattr(config, "speed", None))
+    irr = getattr(config, "irregularity", None)
+    if v is None or v <= 0 or irr is None:
+        return
+    band = band or resolved_band(config)
+    rail = band.rail
+    f_rail = rail.f_max
+    cut = v / f_rail  # the shortest wavelength the rail's band takes at this speed (m)
+    parts = [(f"irregularity.parts[{i}]", q) for i, q in enumerate(irr.parts)] or [("irregularity", irr)]
+    for path, q in parts:
+        if q.kind in SPECTRA:
+            lam_min, lam_max = float(q.wavelength_min), float(q.wavelength_max)
+            field = f"{path}.wavelength_min"
+            if lam_min >= cut:
+                continue
+            rms = abs(q.scale) * math.sqrt(band_variance(q.kind, lam_min, min(lam_max, cut), sato_a=q.sato_a))
+        elif q.kind == "corrugation":
+            lam_min, field = float(q.wavelength), f"{path}.wavelength"
+            if lam_min >= cut:
+                continue
+            rms = abs(q.scale * q.amplitude) / math.sqrt(2.0)
+        else:
+            continue
+        if rms <= OUT_OF_BAND_RMS:
+            continue
+        f_exc = v / lam_min
+        dt = real_or_none(getattr(config.solver, "dt", None))
+        dt_need = dt * rail.time_f_max / f_exc if dt else None
+        if config.discretisation.synthesis_cutoff is not None:
+            grade = f"discretisation.synthesis_cutoff ≥ {f_exc / SYNTHESIS_BAND_SHARE:.0f} Hz"
+        else:
+            grade = "a rail basis that resolves it"
+        step = f" with solver.dt ≤ {dt_need:.2g} s" if dt_need is not None and f_exc > rail.time_f_max else ""
+        warnings.warn(
+            f"{field} = {lam_min:g} m excites the rail up to v/λ = {f_exc:.0f} Hz, beyond the {f_rail:.0f} Hz this "
+            f"model resolves for the rail (limited by its {rail.limited_by}; vtb.resolved_band(config)); its roughness "
+            f"at wavelengths below v/{f_rail:.0f} Hz = {cut:.3g} m has an r.m.s. of {rms * 1e6:.3g} μm (above "
+            f"{OUT_OF_BAND_RMS * 1e6:g} μm): contact forces and losses of contact from it are artefacts of the model. "
+            f"Take it on a grade that resolves {f_exc:.0f} Hz ({grade}{step}), or raise {field} to {cut:.3g} m on this one",
+            ResolutionWarning,
+            stacklevel=5,
+        )
+
+
+#: Share of the synthesis cut-off the model resolves (the core's SYNTHESIS_BAND_SHARE,
+#: model/resolution.rs; the band itself comes from the core).
+SYNTHESIS_BAND_SHARE = 0.5

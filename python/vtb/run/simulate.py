@@ -13,12 +13,13 @@ import numpy as np
 from .. import _core
 from ..analysis.comfort import iso2631, sperling
 from ..analysis.spectra import psd, third_octave, welch_third_octave
+from ..config import gateway
 from ..config.fields import Config
 from ..config.prepare import prepare
 from ..config.resolution import warn_beyond
 from ..errors import VtbError, config_error
 from .indices import metric_unit
-from .synthesis import reduction
+from .synthesis import check_build, in_memory, reduction
 from .tables import frame, to_parquet
 
 
@@ -288,9 +289,13 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
     or a callable ``f(done, total)`` (steps) called every 50 ms."""
     if not (progress in ("auto", True, False) or callable(progress)):
         raise config_error("progress", progress, 'must be "auto", True, False or a callable f(done, total)')
+    building = "auto" if callable(progress) else progress  # a reduction's build announces itself unless False
     if progress == "auto" and not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
         progress = False
+    if isinstance(config, Config):
+        check_build(config)  # a build beyond the budget is refused before the profile is sampled
     text, profile = prepare(config)
+    red = _reduction(config, building, text, profile.core_args())
     bar = None
 
     def tick(done, total):
@@ -305,7 +310,7 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
             bar.update(done - bar.n)
 
     try:
-        out = _core.simulate(text, *profile.core_args(), reduction=_reduction(config), progress=None if progress is False else tick)
+        out = _core.simulate(text, *profile.core_args(), reduction=red, progress=None if progress is False else tick)
         if bar is not None:
             bar.update(bar.total - bar.n)
     finally:
@@ -314,11 +319,16 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
     return _result(out, config)
 
 
-def _reduction(config: Config):
-    """The core reduction a configuration with ``discretisation.synthesis_cutoff`` runs on."""
+def _reduction(config: Config, progress="auto", text: Optional[str] = None, profile: tuple = ()):
+    """The core reduction a configuration with ``discretisation.synthesis_cutoff`` runs on.
+    Before a reduction is loaded or built, the core validates the whole run (``text``, its core
+    JSON, against ``profile``, its sampled irregularity's core arguments): every check that needs no
+    model comes before the costly part."""
     if config.discretisation.synthesis_cutoff is None:
         return None
-    return reduction(config).to_core()
+    if text is not None and not in_memory(config):
+        gateway.validate(text, *profile)
+    return reduction(config, progress).to_core()
 
 
 #: The widest lockstep group by default (measured: ``cargo bench --bench lockstep``), and on a
@@ -396,7 +406,7 @@ def simulate_batch(
         cfg = configs[i]
         key = None if cfg.discretisation.synthesis_cutoff is None else cfg.discretisation.synthesis_cutoff
         try:
-            red = _reduction(cfg)
+            red = _reduction(cfg, "auto" if progress is not False else False, jsons[j], profiles[profile_index[j]])
         except VtbError as e:
             if on_error == "raise":
                 raise

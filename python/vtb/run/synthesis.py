@@ -28,10 +28,12 @@ kept in memory for the process.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
 import os
+import sys
 import tempfile
 import time
 import warnings
@@ -41,9 +43,10 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
 
-from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, layer_index,
-                              shape_matrix, sliced_eigsh, spd_solver)
+from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, fix_signs, layer_index,
+                              shape_matrix, sliced_eigsh, spd_solver, structure_estimate)
 from ..config.fields import Config, structure_json
 from ..errors import SolverError, config_error
 
@@ -181,7 +184,20 @@ def _attachments(system, config: Config) -> np.ndarray:
 
 
 def build(config: Config, progress=None) -> Reduction:
-    """Computes the reduction of ``config``'s structure (no cache; see :func:`reduction`)."""
+    """Computes the reduction of ``config``'s structure (no cache; see :func:`reduction`).
+    ``progress``: ``f(stage, fraction)`` called as the build goes, stage 0 (the undamped modes),
+    1 (the projected quadratic eigenproblem) or 2 (the rail residual) and the fraction of that
+    stage done.
+
+    Deterministic: the same configuration gives the same bits in every process. The eigensolver
+    starts from a fixed vector, every mode's sign is fixed (:func:`vtb.analysis.eigen.fix_signs`)
+    and the dense algebra runs on one BLAS thread: OpenBLAS splits its sums by thread count, so
+    two threads and one gave reductions differing in the last bits."""
+    with threadpool_limits(limits=1):
+        return _build(config, progress)
+
+
+def _build(config: Config, progress=None) -> Reduction:
     t0 = time.perf_counter()
     cfg = _structure_config(config)
     if cfg.discretisation.method != "fem":
@@ -189,13 +205,14 @@ def build(config: Config, progress=None) -> Reduction:
     cutoff = float(config.discretisation.synthesis_cutoff)
     if not (math.isfinite(cutoff) and cutoff > 0):
         raise config_error("discretisation.synthesis_cutoff", cutoff, "must be a finite cut-off > 0 (Hz)")
-    note = progress or (lambda _msg: None)
+    note = progress or (lambda _stage, _fraction: None)
     system = assemble(cfg)
     m, k, c = system.m.tocsc(), system.k.tocsc(), system.c.tocsc()
     hi = (2 * math.pi * BASIS_RATIO * cutoff) ** 2
-    note("undamped modes")
+    note(0, 0.0)
     try:
-        w2, phi = sliced_eigsh(k, m, -1e-6 * hi, hi)
+        # the slices' progress: the part of the band's frequencies covered
+        w2, phi = sliced_eigsh(k, m, -1e-6 * hi, hi, lambda b: note(0, math.sqrt(max(b, 0.0) / hi)))
     except EigshFailed:
         raise SolverError("synthesis: the undamped eigensolver failed") from None
     solver = spd_solver(k)  # K is symmetric positive definite
@@ -210,7 +227,7 @@ def build(config: Config, progress=None) -> Reduction:
         basis = np.hstack([phi, q])
     else:
         basis = phi
-    note("projected quadratic eigenproblem")
+    note(1, 0.0)
     mr, kr, cr = (basis.T @ (a @ basis) for a in (m, k, c))
     p = basis.shape[1]
     minv = scipy.linalg.cho_solve(scipy.linalg.cho_factor(mr), np.eye(p))
@@ -226,17 +243,18 @@ def build(config: Config, progress=None) -> Reduction:
     order = np.lexsort((lam.imag, np.abs(lam)))
     lam, psi = lam[order], basis @ z[:, order]
     a = np.einsum("ij,ij->j", psi, 2.0 * lam[None, :] * (m @ psi) + c @ psi)
-    psi /= np.sqrt(a)[None, :]
+    psi = fix_signs(psi / np.sqrt(a)[None, :])  # the normalisation leaves a sign: fix it
     weight = np.where(lam.imag == 0, 1.0, 2.0)
-    note("rail residual")
+    note(2, 0.0)
     rail = system.layers[0][2]
     band = max(1, int(math.ceil(RESIDUAL_REACH * rail / system.length)))
-    residual = _rail_residual(solver, c, m, psi, lam, weight, rail, band, system.n)
+    residual = _rail_residual(solver, c, m, psi, lam, weight, rail, band, system.n, lambda f: note(2, f))
+    note(2, 1.0)
     return Reduction(cache_key(config), cutoff, lam, psi, weight, rail, band, residual,
                      time.perf_counter() - t0, int(phi.shape[1]), int(basis.shape[1] - phi.shape[1]))
 
 
-def _rail_residual(solver, c, m, psi, lam, weight, rail: int, band: int, n: int, chunk: int = 512) -> np.ndarray:
+def _rail_residual(solver, c, m, psi, lam, weight, rail: int, band: int, n: int, done=None, chunk: int = 512) -> np.ndarray:
     """R_k[i, d] = (F_k − G_k)[i, i + d] for rail DOFs i, 0 ≤ d ≤ band (zero past the rail), k =
     0, 1, 2: the moments F₀ = K⁻¹, F₁ = −K⁻¹CK⁻¹, F₂ = K⁻¹CK⁻¹CK⁻¹ − K⁻¹MK⁻¹ of the full model
     less the kept modes' G_k = −Σ w·Re(ψψᵀ/λ^(k+1))."""
@@ -255,6 +273,8 @@ def _rail_residual(solver, c, m, psi, lam, weight, rail: int, band: int, n: int,
             for d in range(band + 1):
                 i = np.arange(a, min(b, rail - d))
                 out[k, i, d] = full[i - a + d, i - a]
+        if done is not None:
+            done(b / rail)
     return out
 
 
@@ -298,13 +318,46 @@ def _load(path: Path, key: str):
     return red, "cached"
 
 
-def reduction(config: Config, progress: bool = False) -> Reduction:
+def in_memory(config: Config) -> bool:
+    """Whether this process holds the reduction of ``config``'s structure."""
+    return cache_key(config) in _MEMORY
+
+
+def check_build(config: Config) -> None:
+    """Before anything else of a run: when ``config``'s reduction is neither in this process
+    nor in the cache, its build's estimate against ``solver.memory_budget`` (a
+    :class:`~vtb.ConfigError` naming it), so that a build beyond the budget is refused before
+    even the irregularity is sampled."""
+    if config.discretisation.synthesis_cutoff is None or config.discretisation.method != "fem":
+        return
+    key = cache_key(config)
+    if key not in _MEMORY and not _path(key).exists():
+        estimate(config, check=True)
+
+
+def estimate(config: Config, check: bool = False) -> dict:
+    """The core's estimate of what building ``config``'s reduction costs, from the
+    configuration alone (docs/synthesis.md, "Before a build"): ``dofs``, ``basis_modes`` (a
+    bound), ``attachments``, ``modes`` (kept), peak ``bytes``, ``seconds`` on one core and the
+    ``stages``' seconds. ``check``: a build beyond ``solver.memory_budget`` raises
+    :class:`~vtb.ConfigError` naming it, with the estimate."""
+    return structure_estimate(config.to_core_json(), check)
+
+
+def reduction(config: Config, progress="auto") -> Reduction:
     """The reduction of ``config``'s structure at its ``discretisation.synthesis_cutoff``:
     from this process's memory, else from the disk cache (:func:`cache_dir`), else built
     (:func:`build`) and cached. A cached file that is stale or corrupt is refused (with a
     warning naming why) and rebuilt. Its core copy is made once. Refused with a
     :class:`~vtb.ConfigError` naming ``solver.memory_budget`` when the reduction (its arrays and
-    the core's copy) exceeds the configuration's budget."""
+    the core's copy) exceeds the configuration's budget, and, before a build starts, when the
+    build's estimated memory (:func:`estimate`) does.
+
+    A build announces itself on stderr with its estimated time and memory, and shows a tqdm bar
+    of its stages (``progress``: ``"auto"`` the bar on a terminal only, ``True`` anywhere,
+    ``False`` neither the bar nor the announcement). Processes that need the same reduction
+    build it once: the first holds a lock file beside the cache file (:func:`build_lock`), the
+    others wait for it (saying so) and load its file."""
     key = cache_key(config)
     if key in _MEMORY:
         return _within_budget(_MEMORY[key], config)
@@ -313,16 +366,125 @@ def reduction(config: Config, progress: bool = False) -> Reduction:
     if red is None:
         if why != "not cached":
             warnings.warn(f"the cached reduction {path} is {why}: rebuilding it", stacklevel=2)
-        say = (lambda msg: print(f"vtb.synthesis: {msg} …", flush=True)) if progress else None
-        red = build(config, say)
-        try:
-            _save(red, path)
-        except OSError as e:
-            warnings.warn(f"could not cache the reduction at {path} ({e})", stacklevel=2)
+        guess = estimate(config, check=True)  # refused here, before anything is built
+        say = _say if progress is not False else (lambda _msg: None)
+        with build_lock(path, say):
+            red, _ = _load(path, key)  # another process built it while this one waited
+            if red is None:
+                red = _announced_build(config, path, guess, progress)
+                try:
+                    _save(red, path)
+                except OSError as e:
+                    warnings.warn(f"could not cache the reduction at {path} ({e})", stacklevel=2)
     _within_budget(red, config)
     red.to_core()
     _MEMORY[key] = red
     return red
+
+
+def _say(msg: str) -> None:
+    print(f"vtb: {msg}", file=sys.stderr, flush=True)
+
+
+def _announced_build(config: Config, path: Path, guess: dict, progress) -> Reduction:
+    """:func:`build`, announced on stderr with the estimate and followed by a tqdm bar whose
+    total is the estimated time (s), each stage advancing it by its estimated share."""
+    quiet = progress is False
+    if not quiet:
+        _say(f"building the synthesis reduction of this structure once (about {guess['dofs']:.0f} DOFs, cut-off "
+             f"{config.discretisation.synthesis_cutoff:g} Hz, about {guess['modes']:.0f} modes): estimated "
+             f"{_duration(guess['seconds'])} and {guess['bytes'] / 1e9:.2g} GB; later runs load it from {path}")
+    show = progress is True or (progress == "auto" and hasattr(sys.stderr, "isatty") and sys.stderr.isatty())
+    if not show:
+        return build(config)
+    from tqdm.auto import tqdm
+
+    stages = [max(float(x), 1e-3) for x in guess["stages"]]
+    starts = np.concatenate(([0.0], np.cumsum(stages)))
+    names = ("undamped modes", "projected eigenproblem", "rail residual")
+    total = float(starts[-1])
+    with tqdm(total=total, desc="vtb reduction", unit="s est.", file=sys.stderr,
+              bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining} {postfix}") as bar:
+        def note(stage: int, fraction: float) -> None:
+            bar.set_postfix_str(names[stage], refresh=False)
+            target = min(total, float(starts[stage] + min(max(fraction, 0.0), 1.0) * stages[stage]))
+            bar.update(max(0.0, target - bar.n))
+
+        red = build(config, note)
+        bar.update(max(0.0, total - bar.n))
+    return red
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.1f} h"
+
+
+#: Seconds between two tries of a held build lock.
+LOCK_POLL = 0.1
+
+
+@contextlib.contextmanager
+def build_lock(path: Path, say=_say):
+    """Holds the build lock of the cache file ``path`` (``path`` with the suffix ``.lock``, an
+    advisory lock of the operating system, released when its process ends however it ends)
+    while the block runs; waits, saying so once through ``say``, while another process holds
+    it. Where the lock file cannot be made (a read-only cache), the block runs without it."""
+    lock = path.with_suffix(".lock")
+    try:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        f = open(lock, "a+")
+    except OSError as e:
+        warnings.warn(f"could not open the build lock {lock} ({e}): building without it", stacklevel=3)
+        yield
+        return
+    try:
+        waited = False
+        while not _try_lock(f):
+            if not waited:
+                f.seek(0)
+                holder = f.read().strip() or "another process"
+                say(f"waiting for {holder} building this reduction (lock {lock}) …")
+                waited = True
+            time.sleep(LOCK_POLL)
+        f.seek(0)
+        f.truncate()
+        f.write(f"process {os.getpid()}\n")
+        f.flush()
+        yield
+    finally:
+        _unlock(f)
+        f.close()
+
+
+def _try_lock(f) -> bool:
+    try:
+        if os.name == "nt":
+            import msvcrt
+
+            f.seek(0)
+            msvcrt.locking(f.fileno(), msvcrt.LK_NBLCK, 1)
+        else:
+            import fcntl
+
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except OSError:
+        return False
+
+
+def _unlock(f) -> None:
+    try:
+        if os.name == "nt":
+            import msvcrt
+
+            f.seek(0)
+            msvcrt.locking(f.fileno(), msvcrt.LK_UNLCK, 1)
+        else:
+            import fcntl
+
+            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+    except OSError:
+        pass
 
 
 def _within_budget(red: Reduction, config: Config) -> Reduction:

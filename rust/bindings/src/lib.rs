@@ -32,6 +32,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::config::check_schema, m)?)?;
     m.add_function(wrap_pyfunction!(api::signal::low_pass, m)?)?;
     m.add_function(wrap_pyfunction!(api::structure::resolved_bands, m)?)?;
+    m.add_function(wrap_pyfunction!(api::structure::synthesis_build, m)?)?;
     m.add_function(wrap_pyfunction!(api::structure::patch_half_length, m)?)?;
     m.add_class::<api::run::Reduction>()?;
     m.add_class::<api::structure::SpdSolver>()?;

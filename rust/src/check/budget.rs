@@ -151,10 +151,161 @@ pub fn check_histories(cfg: &Config, record: Record, lanes: usize) -> Result<()>
     ))
 }
 
+/// What building a synthesis reduction of a configuration will cost (docs/synthesis.md, "Before
+/// a build"), estimated from the configuration alone: the structure's DOFs, the undamped modes
+/// of the Ritz basis (a bound, `mode_count_bound` at `BASIS_RATIO`·f_c), the dashpot
+/// attachment vectors, the kept complex modes (the bound at f_c), the peak memory (bytes) and
+/// the time (s, one core) of its three stages: the undamped modes, the projected quadratic
+/// eigenproblem and the rail residual.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthesisBuild {
+    pub dofs: f64,
+    pub basis_modes: f64,
+    pub attachments: f64,
+    pub modes: f64,
+    pub bytes: f64,
+    pub stages: [f64; 3],
+}
+
+impl SynthesisBuild {
+    /// The whole build's estimated time (s).
+    pub fn seconds(&self) -> f64 {
+        self.stages.iter().sum()
+    }
+}
+
+/// The synthesis's Ritz basis reaches this multiple of the cut-off (vtb.run.synthesis).
+pub const BASIS_RATIO: f64 = 1.5;
+/// Seconds per unit of the build's three costs, fitted to builds of one span and of one span
+/// between 50 m embankments at 300 Hz on the 2-core machine (one BLAS thread; 2026-12-05 at
+/// load 6, where the figures were 2–2.5 times these, and idle, about half of them): the
+/// spectrum slicing and projections (n·q), the dense companion eigenproblem ((2q)³) and the
+/// rail residual's solves (n·rail DOFs).
+const SECONDS_PER_NQ: f64 = 2.5e-6;
+const SECONDS_PER_EIG: f64 = 3.0e-9;
+const SECONDS_PER_RESIDUAL: f64 = 1.5e-7;
+
+/// The estimate of a synthesis build, `None` without `discretisation.synthesis_cutoff` or for
+/// a structure that is not finite elements.
+pub fn synthesis_build(cfg: &Config) -> Option<SynthesisBuild> {
+    let fc = cfg.discretisation.synthesis_cutoff?;
+    if cfg.discretisation.method != Method::Fem {
+        return None;
+    }
+    let mut dofs = 0.0;
+    let mut rail = 0.0;
+    for (i, l) in cfg.structure.layers.iter().enumerate() {
+        let (a, b) = cfg.extent(i);
+        let h = l
+            .element_length
+            .unwrap_or(cfg.structure.length / cfg.discretisation.fem_elements as f64);
+        let n = 2.0 * ((b - a) / h).ceil() + 2.0 * (1.0 + l.joints.len() as f64);
+        if i == 0 {
+            rail = n;
+        }
+        dofs += n;
+    }
+    let attachments: f64 = cfg
+        .structure
+        .couplings
+        .iter()
+        .filter(|c| c.kind == crate::config::CouplingKind::Discrete && c.damping > 0.0)
+        .map(|c| c.positions.len() as f64)
+        .sum();
+    let bound = |f| crate::model::resolution::mode_count_bound(cfg, f).min(dofs);
+    let basis_modes = bound(BASIS_RATIO * fc);
+    let modes = bound(fc);
+    let (n, q) = (dofs, basis_modes + attachments);
+    // The Ritz basis and its modes (2·n·q), the attachments with their solve and QR (3·n·a),
+    // the projected matrices and the companion problem with its complex eigenvectors and
+    // LAPACK's work (160·q² bytes), ψ with its two products (3·n·m complex), six blocks of 512
+    // rail solves, and the core's copy of ψ.
+    let bytes = F64 * (2.0 * n * q + 3.0 * n * attachments + 6.0 * 512.0 * n)
+        + 160.0 * q * q
+        + 16.0 * 4.0 * n * modes;
+    let stages = [
+        SECONDS_PER_NQ * n * q,
+        SECONDS_PER_EIG * (2.0 * q).powi(3),
+        SECONDS_PER_RESIDUAL * n * rail,
+    ];
+    Some(SynthesisBuild {
+        dofs,
+        basis_modes,
+        attachments,
+        modes,
+        bytes,
+        stages,
+    })
+}
+
+/// Refuses a synthesis build that would not fit `solver.memory_budget`, before it starts.
+pub fn check_synthesis_build(cfg: &Config) -> Result<()> {
+    let Some(b) = synthesis_build(cfg) else {
+        return Ok(());
+    };
+    let budget = cfg.solver.memory_budget;
+    if b.bytes <= budget {
+        return Ok(());
+    }
+    Err(VtbError::config(
+        "solver.memory_budget",
+        budget,
+        format!(
+            "building the synthesis reduction of this structure would need about {:.3} GB \
+             (about {:.0} DOFs × {:.0} basis modes and {:.0} dashpot attachments, {:.0} kept \
+             modes; about {:.0} s), beyond the budget of {:.3} GB: raise solver.memory_budget if \
+             the machine has the memory, or lower discretisation.synthesis_cutoff = {} Hz or the \
+             structure's length",
+            b.bytes / 1e9,
+            b.dofs,
+            b.basis_modes,
+            b.attachments,
+            b.modes,
+            b.seconds(),
+            budget / 1e9,
+            cfg.discretisation.synthesis_cutoff.unwrap_or(0.0)
+        ),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::library::presets::paper as paper_config;
+
+    /// The fast preset (160 m at 4 kHz) needs a few GB to build; sixty spans at 300 Hz need tens
+    /// of GB and are refused by the default budget, naming it, before anything is built.
+    #[test]
+    fn a_synthesis_build_beyond_the_budget_is_refused_before_it_starts() {
+        let fast = crate::library::presets::paper_fast();
+        let b = synthesis_build(&fast).unwrap();
+        assert!(b.bytes > 1e9 && b.bytes < 1e10, "{b:?}");
+        assert!(synthesis_build(&paper_config()).is_none());
+        let mut long = fast.clone();
+        long.discretisation.synthesis_cutoff = Some(300.0);
+        long.structure.length = 60.0 * 32.0;
+        for c in &mut long.structure.couplings {
+            if c.positions.len() > 1 {
+                let d = c.positions[1] - c.positions[0];
+                c.positions = (0..)
+                    .map(|i| c.positions[0] + d * i as f64)
+                    .take_while(|&x| x <= long.structure.length)
+                    .collect();
+            }
+        }
+        let b = synthesis_build(&long).unwrap();
+        assert!(b.bytes > 2e10, "{b:?}");
+        match check_synthesis_build(&long) {
+            Err(VtbError::Config { field, reason, .. }) => {
+                assert_eq!(field, "solver.memory_budget");
+                assert!(
+                    reason.contains("GB") && reason.contains("synthesis"),
+                    "{reason}"
+                );
+            }
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
 
     /// A huge damper count, mode count or recorded length is refused with the field that
     /// drives it and the estimated size; the article case fits the default budget easily.

@@ -105,11 +105,12 @@ impl Reduction {
         values: Vec<f64>,
     ) -> PyResult<Option<(f64, f64)>> {
         let s = vtb::model::basis::Shape { start, values };
-        vtb::engine::synthesis::Filter::from_moments(self.0.residual_moments(&s), || {
-            format!("a load at rail DOF {start}")
-        })
-        .map(|f| f.map(|f| (f.alpha, f.beta)))
-        .map_err(|e| to_py_err(py, e))
+        let at = || format!("a load at rail DOF {start}");
+        self.0
+            .load_moments(&s, at)
+            .and_then(|r| vtb::engine::synthesis::Filter::from_moments(r, at))
+            .map(|f| f.map(|f| (f.alpha, f.beta)))
+            .map_err(|e| to_py_err(py, e))
     }
 }
 

@@ -180,6 +180,35 @@ pub(crate) fn resolved_bands<'py>(
     Ok((out, vtb::model::resolution::pinned_pinned_frequency(&cfg)))
 }
 
+/// The estimated cost of building a configuration's synthesis reduction
+/// (`vtb::check::budget::synthesis_build`): a dict of dofs, basis_modes, attachments, modes,
+/// bytes, seconds and stages (the seconds of its three stages), or None without a synthesis cut-off. With `check`, a build beyond
+/// `solver.memory_budget` raises ConfigError naming it (`check_synthesis_build`).
+#[pyfunction]
+#[pyo3(signature = (config_json, check=false))]
+pub(crate) fn synthesis_build<'py>(
+    py: Python<'py>,
+    config_json: &str,
+    check: bool,
+) -> PyResult<Option<Bound<'py, PyDict>>> {
+    let cfg = parse_config(py, config_json)?;
+    if check {
+        vtb::check::budget::check_synthesis_build(&cfg).map_err(|e| to_py_err(py, e))?;
+    }
+    let Some(b) = vtb::check::budget::synthesis_build(&cfg) else {
+        return Ok(None);
+    };
+    let d = PyDict::new(py);
+    d.set_item("dofs", b.dofs)?;
+    d.set_item("basis_modes", b.basis_modes)?;
+    d.set_item("attachments", b.attachments)?;
+    d.set_item("modes", b.modes)?;
+    d.set_item("bytes", b.bytes)?;
+    d.set_item("seconds", b.seconds())?;
+    d.set_item("stages", b.stages.to_vec())?;
+    Ok(Some(d))
+}
+
 /// Half-length (m) along the rail of the Hertz contact patch of a steel wheel of rolling
 /// radius `wheel_radius` (m) on a steel rail head of crown radius `rail_radius` (m) under
 /// `load` (N) (`vtb::model::contact::patch_half_length`).

@@ -319,6 +319,30 @@ impl Reduction {
         sum
     }
 
+    /// The residual's moments under a load of rail shape s (`residual_moments`), checked: a
+    /// negative r₀ (a static correction where the kept modes overshoot K⁻¹, residual.rs) is
+    /// accepted when the load's whole static flexibility sᵀK⁻¹s (`static_flexibility`) is
+    /// positive, else refused as a corrupt reduction (`at` names the load). Non-finite moments
+    /// are the filter's to refuse (`Filter::from_moments`).
+    pub fn load_moments(&self, s: &Shape, at: impl FnOnce() -> String) -> Result<[f64; 3]> {
+        let r = self.residual_moments(s);
+        if r[0] < 0.0 {
+            let total = self.static_flexibility(s, s);
+            if !(total > 0.0) {
+                return Err(VtbError::Solver(format!(
+                    "the rail residual under {} has moments {:e}, {:e}, {:e} and the load's \
+                     static flexibility is {total:e} m/N: not a flexibility (the reduction is \
+                     corrupt or not of a stable structure)",
+                    at(),
+                    r[0],
+                    r[1],
+                    r[2]
+                )));
+            }
+        }
+        Ok(r)
+    }
+
     /// Static flexibility aᵀK⁻¹b of the reduction: −Σ w·Re(ψᵀa·ψᵀb/λ) + aᵀRb.
     pub fn static_flexibility(&self, a: &Shape, b: &Shape) -> f64 {
         let (mut pa, mut pb) = (CVec::zeros(self.stride), CVec::zeros(self.stride));
@@ -376,6 +400,42 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("reduction.psi[1, 0].im"), "{e}");
+    }
+
+    /// One real mode λ = −1 of ψ = (1, 0) on two rail DOFs (w = 1: static part ψψᵀ = 1 at
+    /// DOF 0) and a residual R₀ with diagonal r at DOF 0.
+    fn one_mode_with_residual(r: f64) -> Reduction {
+        let mut residual = vec![0.0; 6];
+        residual[0] = r;
+        Reduction::new(
+            2,
+            vec![-1.0],
+            vec![0.0],
+            vec![1.0],
+            &[1.0, 0.0, 0.0, 0.0],
+            2,
+            0,
+            residual,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_negative_residual_is_a_static_correction_while_the_loads_flexibility_is_positive() {
+        let s = Shape {
+            start: 0,
+            values: vec![1.0],
+        };
+        // r₀ = −0.25 under a modal flexibility of 1: the load's flexibility 0.75, accepted.
+        let red = one_mode_with_residual(-0.25);
+        assert_eq!(red.load_moments(&s, String::new).unwrap()[0], -0.25);
+        assert!((red.static_flexibility(&s, &s) - 0.75).abs() < 1e-15);
+        // r₀ = −1.5: the load's flexibility would be −0.5: refused, naming the load.
+        let red = one_mode_with_residual(-1.5);
+        let e = red
+            .load_moments(&s, || "wheel 1 at x = 3 m".into())
+            .unwrap_err();
+        assert!(e.to_string().contains("wheel 1 at x = 3 m"), "{e}");
     }
 
     #[test]

@@ -132,19 +132,26 @@ impl<const W: usize> SynthesisSide<'_, W> {
         for w in 0..nw {
             let s = &self.wheel_shapes[w];
             let x = veh.x0[w] + cfg.speed * t1;
-            let (modal, moments) = if self.active[w] {
-                (self.rail_step.quadratic(s), red.residual_moments(s))
-            } else {
-                (0.0, [0.0; 3])
-            };
-            self.self_res[w] = moments[0];
-            let filter = Filter::from_moments(moments, || {
+            let at = || {
                 format!(
                     "vehicles[{}] wheel {} at x = {x:.4} m",
                     w / wpc,
                     w % wpc + 1
                 )
-            });
+            };
+            let (modal, moments) = if self.active[w] {
+                match red.load_moments(s, at) {
+                    Ok(r) => (self.rail_step.quadratic(s), r),
+                    Err(e) => {
+                        failed = Some(e);
+                        (self.rail_step.quadratic(s), [0.0; 3])
+                    }
+                }
+            } else {
+                (0.0, [0.0; 3])
+            };
+            self.self_res[w] = moments[0];
+            let filter = Filter::from_moments(moments, at);
             let step = match filter {
                 Ok(Some(f)) => f.step(dt),
                 Ok(None) => FilterStep::pass(dt),
