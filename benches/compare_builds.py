@@ -5,8 +5,10 @@
 Each round runs every case once in a fresh process of each build, old and new alternated (the
 order swapped every round, so a drift of the machine's load falls on both); a case's time is
 the best of three runs in its process after a warm-up run (the model's assembly and the
-irregularity's sampling included: a whole ``vtb.simulate``). Prints, per case, the median
-time of each build over the rounds and the ratio new/old. The fast case needs the 160 m
+irregularity's sampling included: a whole ``vtb.simulate``), in CPU time of the process (all
+its threads): on a shared machine the wall time of a run varies with the other load, its CPU
+time much less. Prints, per case, the median time of each build over the rounds and the ratio
+new/old. The fast case needs the 160 m
 reduction in the cache (both builds read the same file).
 """
 
@@ -37,7 +39,7 @@ run = (lambda: vtb.simulate_batch(cfgs, progress=False)) if "cfgs" in dir() else
 run()
 best = float("inf")
 for _ in range(3):
-    t = time.perf_counter(); run(); best = min(best, time.perf_counter() - t)
+    t = time.process_time(); run(); best = min(best, time.process_time() - t)
 print(json.dumps(best))
 """
 
