@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+import vtb
 from vtb.config import irregularity as irr
 from vtb.errors import ConfigError
 from vtb.config.irregularity import Irregularity
@@ -143,3 +144,15 @@ def test_band_beyond_time_step_resolution_is_rejected():
     with pytest.raises(ConfigError) as e:
         Irregularity(kind="tbt3352", wavelength_min=0.006, dx=0.001).validate(speed=80, dt=5e-5)
     assert e.value.field == "irregularity.wavelength_min"
+
+
+@pytest.mark.parametrize("kind", [[], 3, None])
+def test_a_kind_that_is_no_name_is_refused_naming_it(kind):
+    """Found by the fuzzer: a list as the kind raised a raw TypeError while the core's default
+    ω_r looked up the excited band; it is refused as the kind's own error."""
+    c = vtb.paper_config()
+    c.solver.t_end = 0.01
+    c.irregularity.kind = kind
+    with pytest.raises(vtb.ConfigError) as e:
+        vtb.simulate(c, progress=False)
+    assert e.value.field == "irregularity.kind"

@@ -299,6 +299,8 @@ class Config(StrictFields):
         ``wavelength`` or a dip's ``length`` twice; ``None`` without a wavelength. The core
         takes its default ω_r from it (``discretisation.excitation_wavelengths``)."""
         irr = self.irregularity
+        if not isinstance(getattr(irr, "kind", None), str):
+            return None  # a kind that is no name is refused by the irregularity's own check
         band = {"corrugation": ("wavelength", "wavelength"), "cosine_dip": ("length", "length")}.get(
             irr.kind, ("wavelength_min", "wavelength_max") if irr.kind in SPECTRA else None)
         if band is None:
