@@ -163,6 +163,28 @@ impl Structure {
         }
     }
 
+    /// The layers' unknowns ordered along the track when all layers are finite-element
+    /// meshes: by their node's x, then layer (top first), then DOF. Every matrix entry
+    /// couples nodes at most one element of some layer apart, so in this order the matrices
+    /// are banded with a bandwidth set by the meshes' densities, not by the length: an LDLᵀ in
+    /// it fills O(n), and the columns of A⁻¹ the contact needs are short windows (they decay
+    /// along the track). `None` when a layer is modal (its DOFs span the whole length).
+    pub fn length_order(&self) -> Option<Vec<usize>> {
+        let mut keyed = Vec::with_capacity(self.n_dofs);
+        for (li, l) in self.layers.iter().enumerate() {
+            let LayerBasis::Fem(mesh) = &l.basis else {
+                return None;
+            };
+            for (j, &x) in mesh.nodes.iter().enumerate() {
+                for d in 0..2 {
+                    keyed.push((x, li, l.offset + 2 * j + d));
+                }
+            }
+        }
+        keyed.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        Some(keyed.into_iter().map(|k| k.2).collect())
+    }
+
     /// The unknowns grouped by mesh node (every layer's DOFs at node j) when all layers are
     /// finite-element meshes with the same nodes: the grouping in which the matrices are block
     /// tridiagonal.
@@ -486,6 +508,84 @@ fn add_on_cubics(asm: &mut Assembler, fs: &FeSea, d: impl Fn(usize, usize) -> f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The converged preset's track and girder cut to `length` (m), its couplings kept on it.
+    fn converged(length: f64) -> Structure {
+        let mut cfg = crate::library::presets::paper_converged();
+        cfg.structure.length = length;
+        for cp in cfg.structure.couplings.iter_mut() {
+            cp.positions.retain(|&x| x <= length + 1e-9);
+        }
+        Structure::build(&cfg).unwrap()
+    }
+
+    /// Half-bandwidth of M + K + C (with the layers' own meshes) in `order`.
+    fn bandwidth(st: &Structure, order: &[usize]) -> usize {
+        let mut inv = vec![usize::MAX; st.n_dofs];
+        for (k, &i) in order.iter().enumerate() {
+            inv[i] = k;
+        }
+        [&st.m, &st.k, &st.c]
+            .iter()
+            .flat_map(|a| {
+                (0..a.n).flat_map(move |i| {
+                    (a.row_ptr[i]..a.row_ptr[i + 1]).map(move |p| (i, a.col_idx[p]))
+                })
+            })
+            .map(|(i, j)| inv[i].abs_diff(inv[j]))
+            .max()
+            .unwrap()
+    }
+
+    /// Ordered along the track, the converged model's matrices (rail 10 times finer than the
+    /// lower layers, no shared nodes) have a bandwidth that does not grow with the length,
+    /// while the layer-by-layer numbering's grows with it; the order is a permutation.
+    #[test]
+    fn length_order_has_a_bandwidth_independent_of_length() {
+        let (short, long) = (converged(32.0), converged(96.0));
+        assert!(short.node_blocks().is_none(), "meshes of their own");
+        let mut widths = Vec::new();
+        for st in [&short, &long] {
+            let order = st.length_order().unwrap();
+            let mut seen = order.clone();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..st.n_dofs).collect::<Vec<_>>());
+            let natural: Vec<usize> = (0..st.n_dofs).collect();
+            widths.push((bandwidth(st, &order), bandwidth(st, &natural)));
+        }
+        // The factor in this order: its fill per unknown does not grow with the length, and
+        // it solves as AMD's does (a second ordering of the same matrix).
+        let fill: Vec<f64> = [&short, &long]
+            .iter()
+            .map(|st| {
+                let a = CsrMatrix::combine(&[(2.0, &st.m), (1e-5, &st.c), (1e-10, &st.k)]);
+                let f =
+                    crate::linalg::sparse::Ldlt::with_ordering(&a, st.length_order().as_deref())
+                        .unwrap();
+                let b: Vec<f64> = (0..a.n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+                let (x, y) = (
+                    f.solve(&b),
+                    crate::linalg::sparse::Ldlt::new(&a).unwrap().solve(&b),
+                );
+                let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for (u, v) in x.iter().zip(&y) {
+                    assert!((u - v).abs() <= 1e-10 * scale, "{u} vs {v}");
+                }
+                f.nnz_l() as f64 / a.n as f64
+            })
+            .collect();
+        assert!(
+            fill[1] <= 1.02 * fill[0],
+            "L's entries per unknown: {fill:?}"
+        );
+        let ((short_w, short_nat), (long_w, long_nat)) = (widths[0], widths[1]);
+        assert_eq!(short_w, long_w, "{widths:?}");
+        assert!(short_w < 64, "{widths:?}");
+        assert!(long_nat > 2 * short_nat, "{widths:?}");
+        let mut modal = crate::library::presets::paper();
+        modal.discretisation.method = Method::Modal;
+        assert!(Structure::build(&modal).unwrap().length_order().is_none());
+    }
 
     /// The rail's share of a wheel's force is 0 off the rail and at its ends, a raised cosine
     /// over `edge_ramp` (one half at half the ramp), 1 in between; the wheel's shape vector is

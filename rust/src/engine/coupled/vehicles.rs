@@ -3,7 +3,7 @@
 //! forces.
 
 use crate::config::Config;
-use crate::engine::integrator::{GW, Newmark, PortBlock, accelerations};
+use crate::engine::integrator::{GW, Newmark, Numbering, PortBlock, accelerations};
 use crate::error::{Result, VtbError};
 use crate::linalg::sparse::{Assembler, CsrMatrix};
 use crate::model::Model;
@@ -70,7 +70,7 @@ impl<const W: usize> CarRun<W> {
             am.add(i, i, car.mass[i]);
         }
         let (m, c, k) = (am.finish(), dense(&car.c), dense(&car.k));
-        let mut nm = Newmark::<W>::new(&m, &c, &k, dt, &[], 1, None, &[])?;
+        let mut nm = Newmark::<W>::new(&m, &c, &k, dt, &[], 1, Numbering::Search, &[])?;
         for i in 0..nd {
             nm.observe(&Shape {
                 start: i,

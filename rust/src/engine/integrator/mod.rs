@@ -95,6 +95,21 @@ impl Engine {
     }
 }
 
+/// How a stepper numbers the unknowns it factorises.
+#[derive(Clone, Copy, Debug)]
+pub enum Numbering<'a> {
+    /// The cheapest of a few general orderings by an estimate of one step's work
+    /// (`Ldlt::for_stepping`): modal bases, cars.
+    Search,
+    /// The unknowns grouped by node: the block solver if the matrices are block tridiagonal
+    /// in that grouping (finite elements on one mesh), else `Search`.
+    Blocks(&'a [Vec<usize>]),
+    /// This elimination order or AMD, whichever fills less (finite elements on meshes of their
+    /// own, ordered along the track): both factors cost O(length), so the general search's
+    /// costly trials are skipped.
+    Order(&'a [usize]),
+}
+
 /// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F for W jobs in lockstep
 /// (lanes). The lanes share the matrices, the factor of A, the dampers' positions and the
 /// ports; their states, forces and damper parameters are their own, stored interleaved
@@ -140,8 +155,7 @@ impl<const W: usize> Newmark<W> {
     /// Short port vectors (finite elements, car wheelsets) use *column ports*: the columns of
     /// A⁻¹ at the few unknowns they touch are cached, so a step needs one full solve and a few
     /// axpys. Long ones (modal layers) are forward-substituted with the right-hand side.
-    /// `blocks` optionally groups the unknowns by node: if the matrices are block tridiagonal
-    /// in that grouping (finite elements), the block solver is used. `attachments` are dampers
+    /// `numbering` says how the unknowns are ordered for the factor (`Numbering`). `attachments` are dampers
     /// whose nodes are the DOFs after those of m, c, k (which exclude the dampers); every lane
     /// starts with their parameters (`set_damper_params` changes a lane's).
     #[allow(clippy::too_many_arguments)]
@@ -152,20 +166,38 @@ impl<const W: usize> Newmark<W> {
         dt: f64,
         ports: &[usize],
         port_len: usize,
-        blocks: Option<&[Vec<usize>]>,
+        numbering: Numbering<'_>,
         attachments: &[Attachment],
     ) -> Result<Self> {
         const { assert!(W >= 1 && W <= 8, "1 to 8 lanes") };
         let a = CsrMatrix::combine(&[(2.0, m), (dt, c), (0.5 * dt * dt, k)]);
-        let pattern = CsrMatrix::combine(&[(1.0, &a), (1.0, m), (1.0, k)]);
-        let (engine, perm, inv) = match blocks.and_then(|g| BlockLayout::new(g, &pattern)) {
+        let layout = match numbering {
+            Numbering::Blocks(g) => {
+                BlockLayout::new(g, &CsrMatrix::combine(&[(1.0, &a), (1.0, m), (1.0, k)]))
+            }
+            _ => None,
+        };
+        let (engine, perm, inv) = match layout {
             Some(lay) => {
                 let factor = BlockLdlt::new(&BlockTri::new(&a, &lay), &lay)?;
                 let mk = BlockPair::new(&BlockTri::new(m, &lay), &BlockTri::new(k, &lay));
                 (Engine::Blocks { factor, mk }, lay.perm, lay.inv)
             }
             None => {
-                let factor = Ldlt::for_stepping(&a, ports)?;
+                let factor = match numbering {
+                    Numbering::Order(order) => {
+                        // The given order bounds the fill by its bandwidth (linear in length);
+                        // AMD, linear too on a track, fills less where it finds the short
+                        // chains between couplings. A solve's work is L's entries: fewer wins.
+                        let (along, amd) = (Ldlt::with_ordering(&a, Some(order))?, Ldlt::new(&a)?);
+                        if amd.nnz_l() < along.nnz_l() {
+                            amd
+                        } else {
+                            along
+                        }
+                    }
+                    _ => Ldlt::for_stepping(&a, ports)?,
+                };
                 let mk = SymOperator::new(&[m, k], &factor.perm);
                 let (perm, inv) = (factor.perm.clone(), factor.inv.clone());
                 (Engine::Sparse { factor, mk }, perm, inv)

@@ -26,7 +26,7 @@ fn newmark_sdof_period_elongation_matches_exact_formula() {
     ] {
         let dt = ratio;
         let (m, k, c) = (scalar(1.0), scalar(w * w), CsrMatrix::zeros(1));
-        let mut nm: Newmark = Newmark::new(&m, &c, &k, dt, &[], 1, None, &[]).unwrap();
+        let mut nm: Newmark = Newmark::new(&m, &c, &k, dt, &[], 1, Numbering::Search, &[]).unwrap();
         nm.observe(&Shape {
             start: 0,
             values: vec![1.0],
@@ -134,12 +134,21 @@ fn dampers_by_woodbury_match_assembled_matrices() {
                 1e-2,
                 &[0, 1],
                 port_len,
-                None,
+                Numbering::Search,
                 std::slice::from_ref(&att),
             )
             .unwrap();
-            let mut b: Newmark =
-                Newmark::new(&mf, &cf, &kf, 1e-2, &[0, 1], port_len, None, &[]).unwrap();
+            let mut b: Newmark = Newmark::new(
+                &mf,
+                &cf,
+                &kf,
+                1e-2,
+                &[0, 1],
+                port_len,
+                Numbering::Search,
+                &[],
+            )
+            .unwrap();
             let (ra, rb) = (run(&mut a), run(&mut b));
             let scale = rb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (x, y) in ra.iter().zip(&rb) {
@@ -148,6 +157,64 @@ fn dampers_by_woodbury_match_assembled_matrices() {
                     "{kind:?}, port_len {port_len}: {x} vs {y}"
                 );
             }
+        }
+    }
+}
+
+/// A wheel-like port (a load and a contact spring on the rail's shape vector at a moving x)
+/// on two 32 m spans of the converged preset's finite elements (rail ten times finer than the
+/// lower layers): with the length order (the stepper keeps the factor that fills less, the
+/// order's or AMD's) it gives the general search's results to round-off, in the rail's and
+/// the girder's displacements and the contact force.
+#[test]
+fn length_order_matches_the_general_search_on_two_spans() {
+    let mut cfg = crate::library::presets::paper_converged();
+    cfg.structure.length = 64.0;
+    for cp in cfg.structure.couplings.iter_mut() {
+        cp.positions.retain(|&x| x <= 64.0 + 1e-9);
+    }
+    let st = crate::model::structure::Structure::build(&cfg).unwrap();
+    let (m, c, k) = st.stepping_matrices();
+    let dt = cfg.solver.dt;
+    let rail: Vec<usize> = (0..st.layers[0].n_dofs()).collect();
+    let order = st.length_order().unwrap();
+    let girder = st.layers.len() - 1;
+    let run = |numbering: Numbering| -> Vec<f64> {
+        let mut nm: Newmark = Newmark::new(m, c, k, dt, &rail, 4, numbering, &[]).unwrap();
+        for (layer, x) in [(0, 31.0), (0, 31.3), (girder, 16.0), (girder, 31.0)] {
+            nm.observe(&st.shape(layer, x));
+        }
+        let mut ports = PortBlock::new(nm.n);
+        let f = vec![0.0; nm.n];
+        let (k_contact, load) = (1.2e9, 7e4);
+        let mut out = Vec::new();
+        for step in 0..600 {
+            let x = 30.0 + 80.0 * dt * step as f64;
+            nm.begin_step(&f, &f);
+            nm.vector_into(&st.shape(0, x), &mut ports.vecs[0]);
+            nm.prepare_ports(&mut ports);
+            let free = nm.free_port_disp(&ports)[0][0];
+            let g = nm.port_compliance(&ports, &ports)[0][0][0];
+            let p = (load - k_contact * free) / (1.0 + k_contact * g);
+            nm.add_port_forces(&ports, &[[p, 0.0, 0.0, 0.0]]);
+            nm.end_step();
+            out.extend((0..4).map(|j| nm.observed(j, 0).0));
+            out.push(p);
+        }
+        out
+    };
+    let (search, along) = (run(Numbering::Search), run(Numbering::Order(&order)));
+    // Compared per quantity (displacements and forces differ in scale).
+    for q in 0..5 {
+        let of = |v: &[f64]| -> Vec<f64> { v.iter().skip(q).step_by(5).copied().collect() };
+        let (a, b) = (of(&search), of(&along));
+        let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        assert!(scale > 0.0, "quantity {q} moved");
+        for (step, (x, y)) in a.iter().zip(&b).enumerate() {
+            assert!(
+                (x - y).abs() <= 1e-9 * scale,
+                "quantity {q}, step {step}: {x} vs {y}"
+            );
         }
     }
 }

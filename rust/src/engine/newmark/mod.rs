@@ -11,7 +11,7 @@ mod correction;
 mod step;
 
 use super::coupled::{self, Mover, Vehicles};
-use super::integrator::{Newmark, PortBlock, SVec, accelerations};
+use super::integrator::{Newmark, Numbering, PortBlock, SVec, accelerations};
 use super::{Control, LaneSpec};
 use crate::config::{DamperParams, InitialState, Profile};
 use crate::error::{Result, VtbError};
@@ -130,6 +130,14 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
         };
         crate::check::budget::check_histories(cfg, record, W)?;
         let (m, c, k) = st.stepping_matrices();
+        // Finite elements: one mesh → block tridiagonal; meshes of their own → ordered along
+        // the track, linear in length (the general search's trial factors cost far more).
+        let (blocks, order) = (st.node_blocks(), st.length_order());
+        let numbering = match (&blocks, &order) {
+            (Some(b), _) => Numbering::Blocks(b),
+            (None, Some(o)) => Numbering::Order(o),
+            (None, None) => Numbering::Search,
+        };
         let mut track = Newmark::<W>::new(
             m,
             c,
@@ -137,7 +145,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             dt,
             &contact_dofs,
             st.layers[0].basis.shape_len(),
-            st.node_blocks().as_deref(),
+            numbering,
             &st.dampers,
         )?;
         for lane in lanes {
