@@ -330,3 +330,10 @@ def test_what_the_long_fuzz_run_found_is_named():
     d = small_config().to_dict()
     d["irregularity"]["kind"] = {"a": 1}
     refused(lambda: vtb.simulate(vtb.Config.from_dict(d), progress=False), "irregularity.kind")
+
+
+def test_a_defect_seen_through_an_implausible_wheel_is_refused_at_once():
+    """Found by the long fuzz run (seed 1): a wheel radius of 1e300 m hung the wheel-path
+    envelope; the radius is held to the wheels' plausible range."""
+    joint = vtb.Irregularity(kind="rail_joint", position=21.0, depth=1e-4, length=0.3, wheel_radius=1e300)
+    refused(_simulate(lambda c: setattr(c, "irregularity", joint)), "irregularity.wheel_radius", match="plausible wheel radius")

@@ -430,6 +430,12 @@ class Irregularity(StrictFields):
                 finite("wheel_radius", self.wheel_radius)
                 if self.wheel_radius < 0 or (self.kind == "wheel_flat" and self.wheel_radius == 0):
                     raise config_error(f"{p}.wheel_radius", self.wheel_radius, "must be > 0" if self.kind == "wheel_flat" else "must be >= 0")
+                from . import gateway  # the wheels' plausible range is the core's
+
+                top = next(hi for f, _, hi, *_ in gateway.plausible_ranges() if f == "vehicles[*].wheel_radius")
+                if self.wheel_radius > top:
+                    raise config_error(f"{p}.wheel_radius", self.wheel_radius, f"beyond the plausible wheel radius of {top:g} m "
+                                                                              "(vehicles[*].wheel_radius, docs/limits.md)")
             if self.kind == "rail_joint":
                 finite("step", self.step)
             elif self.kind == "dipped_weld":
