@@ -1,13 +1,16 @@
-"""The long fuzz run: N generated bad configurations, TOML texts and attribute assignments
-(tests/fuzz_cases.py) thrown at the API in worker processes, so that an abort or a hang is
-caught and counted instead of ending the run.
+"""The long fuzz run: N generated bad inputs per public surface (tests/fuzz_surfaces.py: the
+older configuration surface of tests/fuzz_cases.py, trains, zones, spans, profile parts,
+damper groups, band levels, contact, edges, studies and optimisation) thrown at the API in
+worker processes, so that an abort or a hang is caught and counted instead of ending the run.
 
-    python benches/fuzz_config.py --cases 10000 [--workers 2] [--timeout 120] [--seed 0]
+    python benches/fuzz_config.py --cases 10000 [--surface all|config|trains|...] [--workers 2]
+                                  [--timeout 10] [--seed 0]
 
-Prints the counts of every outcome: ok (a documented exception naming its field, or a finite
-run), aborts (the worker process died), panics, hangs (no answer within --timeout s),
-non-finite successes, errors without a field name and undocumented exceptions, with the
-first cases of each finding. Exit status 1 when there is any finding.
+Cases go round the surfaces chosen (``all``: every one, in turn). Prints a table per surface —
+cases, ok (a finite result), refused (a documented vtb error naming a usable field) and the
+findings: aborts (the worker process died), panics, hangs (no answer within --timeout s),
+non-vtb exceptions, errors naming no usable field, non-finite successes and mutated inputs —
+then the first cases of each finding. Exit status 1 when there is any finding.
 """
 
 from __future__ import annotations
@@ -22,27 +25,33 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+#: Seconds a fresh worker may take to import vtb before its first case (not a case's hang).
+STARTUP = 120.0
+SURFACES = ("config", "trains", "zones", "spans", "profile", "dampers", "bands", "contact", "edges", "studies", "optimisation")
 WORKER = r"""
 import json, random, sys, warnings
 sys.path.insert(0, sys.argv[1])
 warnings.simplefilter("ignore")
-import fuzz_cases
+import fuzz_surfaces
 seed, start, stop = map(int, sys.argv[2:5])
+surfaces = sys.argv[5].split(",")
 for i in range(start, stop):
-    label, thunk = fuzz_cases.make_case(random.Random(seed * 1_000_003 + i))
-    print(json.dumps({"i": i, "label": label, "started": True}), flush=True)
-    v, detail = fuzz_cases.verdict(thunk)
-    print(json.dumps({"i": i, "label": label, "verdict": v, "detail": detail[:300]}), flush=True)
+    surface = surfaces[i % len(surfaces)]
+    label, thunk, inputs = fuzz_surfaces.make_case(random.Random(seed * 1_000_003 + i), surface)
+    print(json.dumps({"i": i, "surface": surface, "label": label[:200], "started": True}), flush=True)
+    v, detail = fuzz_surfaces.verdict(label, thunk, inputs)
+    print(json.dumps({"i": i, "surface": surface, "label": label[:200], "verdict": v, "detail": detail[:300]}), flush=True)
 """
+VERDICTS = ("ok", "refused", "abort", "panic", "hang", "undocumented", "unnamed", "nonfinite", "mutated")
 
 
-def run_range(seed: int, start: int, stop: int, timeout: float, out: collections.Counter, findings: dict) -> None:
+def run_range(seed: int, start: int, stop: int, timeout: float, out: collections.Counter, findings: dict, surfaces: str) -> None:
     """Cases [start, stop) in one worker; a dead or silent worker is restarted after the case
     it was on."""
     i = start
     while i < stop:
         proc = subprocess.Popen(
-            [sys.executable, "-c", WORKER, str(HERE.parent / "tests"), str(seed), str(i), str(stop)],
+            [sys.executable, "-c", WORKER, str(HERE.parent / "tests"), str(seed), str(i), str(stop), surfaces],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         )
         current = None
@@ -62,34 +71,53 @@ def run_range(seed: int, start: int, stop: int, timeout: float, out: collections
                 last = time.monotonic()
                 if rec.get("started"):
                     current = rec
+                    last = time.monotonic()
                     continue
-                out[rec["verdict"]] += 1
-                if rec["verdict"] != "ok":
-                    findings.setdefault(rec["verdict"], []).append(f"#{rec['i']} {rec['label']}: {rec['detail']}")
+                out[(rec["surface"], rec["verdict"])] += 1
+                if rec["verdict"] not in ("ok", "refused"):
+                    findings.setdefault(rec["verdict"], []).append(f"#{rec['i']} [{rec['surface']}] {rec['label']}: {rec['detail']}")
                 current = None
                 i = rec["i"] + 1
-            elif time.monotonic() - last > timeout:
+            elif time.monotonic() - last > (timeout if current is not None else STARTUP):  # a worker's imports are no case
                 proc.kill()
-                out["hang"] += 1
-                findings.setdefault("hang", []).append(f"#{current['i']} {current['label']}" if current else "?")
+                out[(current["surface"] if current else "?", "hang")] += 1
+                findings.setdefault("hang", []).append(f"#{current['i']} [{current['surface']}] {current['label']}" if current else "?")
                 i = (current["i"] if current else i) + 1
                 current = None
                 break
         proc.wait()
         if current is not None:  # the worker died inside a case
-            out["abort"] += 1
+            out[(current["surface"], "abort")] += 1
             err = proc.stderr.read()[-300:]
-            findings.setdefault("abort", []).append(f"#{current['i']} {current['label']}: exit {proc.returncode} {err}")
+            findings.setdefault("abort", []).append(f"#{current['i']} [{current['surface']}] {current['label']}: exit {proc.returncode} {err}")
             i = current["i"] + 1
+
+
+def table(counts: collections.Counter, surfaces) -> str:
+    """The Markdown table of the counts (surface, verdict) per surface, with a total row."""
+    head = "| surface | cases | " + " | ".join(VERDICTS) + " |"
+    lines = [head, "|" + "---|" * (len(VERDICTS) + 2)]
+    total = collections.Counter()
+    for s in surfaces:
+        row = [counts.get((s, v), 0) for v in VERDICTS]
+        total.update(dict(zip(VERDICTS, row)))
+        lines.append(f"| {s} | {sum(row)} | " + " | ".join(map(str, row)) + " |")
+    lines.append(f"| **all** | {sum(total.values())} | " + " | ".join(str(total[v]) for v in VERDICTS) + " |")
+    return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=10_000)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--timeout", type=float, default=120.0, help="seconds without an answer that make a case a hang")
+    ap.add_argument("--timeout", type=float, default=10.0, help="seconds without an answer that make a case a hang")
+    ap.add_argument("--surface", default="all", help="all, or a comma-separated list of: " + ", ".join(SURFACES))
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    surfaces = SURFACES if args.surface == "all" else tuple(args.surface.split(","))
+    unknown = sorted(set(surfaces) - set(SURFACES))
+    if unknown:
+        ap.error(f"unknown surface(s) {unknown}; known: {', '.join(SURFACES)}")
     from concurrent.futures import ThreadPoolExecutor
 
     t0 = time.perf_counter()
@@ -98,7 +126,8 @@ def main(argv=None) -> int:
     chunk = -(-args.cases // args.workers)
     with ThreadPoolExecutor(args.workers) as pool:
         parts = [(collections.Counter(), {}) for _ in range(args.workers)]
-        futs = [pool.submit(run_range, args.seed, w * chunk, min(args.cases, (w + 1) * chunk), args.timeout, *parts[w]) for w in range(args.workers)]
+        futs = [pool.submit(run_range, args.seed, w * chunk, min(args.cases, (w + 1) * chunk), args.timeout, *parts[w], ",".join(surfaces))
+                for w in range(args.workers)]
         for f in futs:
             f.result()
     for c, fnd in parts:
@@ -106,9 +135,8 @@ def main(argv=None) -> int:
         for k, v in fnd.items():
             findings.setdefault(k, []).extend(v)
     tried = sum(counts.values())
-    print(f"# fuzz: {tried} cases (seed {args.seed}) in {time.perf_counter() - t0:.0f} s")
-    for key in ("ok", "abort", "panic", "hang", "nonfinite", "unnamed", "undocumented"):
-        print(f"{key:<13} {counts.get(key, 0)}")
+    print(f"# fuzz: {tried} cases (seed {args.seed}, surfaces {args.surface}, hang = {args.timeout:g} s) in {time.perf_counter() - t0:.0f} s\n")
+    print(table(counts, surfaces))
     for key, cases in findings.items():
         print(f"\n## {key} ({len(cases)})")
         for c in cases[:10]:

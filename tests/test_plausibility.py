@@ -31,6 +31,8 @@ def config_for(field):
         c.tids = vtb.tids_around(c)
     if field.startswith("dampers["):
         c.dampers = [vtb.DamperGroup(kind="tvmd", inertance=5.0, stiffness=2e8, damping=1e3, positions=[40.0])]
+    if field.startswith("forces["):
+        c.forces = [vtb.MovingForce(70e3, 20.0)]
     return c
 
 

@@ -158,3 +158,54 @@ def test_reference_lines_have_legend_entries():
     fig = plotting.plot_receptance(f, [1e-9 * np.ones(20)], ["point"], pinned_pinned=1000.0)
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert "pinned–pinned $f_{pp}$" in labels
+
+
+@pytest.fixture(scope="module")
+def optimisation():
+    """A real (tiny) article optimisation: what vtb.optimize returns."""
+    return vtb.optimize(small_config(), pop_size=4, n_gen=2, seed=3, progress=False)
+
+
+def test_every_plotting_function_takes_the_result_type_the_api_returns(runs, optimisation):
+    import warnings
+
+    cfg = small_config(tids=False)
+    cfg.discretisation.method = "fem"
+    cfg.discretisation.fem_elements = 80
+    f = np.geomspace(50.0, 4000.0, 12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", vtb.ResolutionWarning)
+        alpha = vtb.receptance(cfg, 80.32, f)
+        dr = vtb.decay_rate(cfg, f)
+    assert isinstance(alpha, np.ndarray) and alpha.resolved is not None and dr.resolved == alpha.resolved
+    assert isinstance(optimisation, vtb.OptimizationResult)
+    figures = {
+        "histories": plotting.plot_histories(runs[0]),
+        "comparison": plotting.plot_comparison(list(runs), ["a", "b"]),
+        "third octave": plotting.plot_third_octave(list(runs), ["a", "b"]),
+        "receptance": plotting.plot_receptance(f, [alpha], ["point"]),
+        "decay rate": plotting.plot_decay_rate(f, [dr], ["rail"]),
+        "pareto": plotting.plot_pareto(optimisation),
+        "hypervolume": plotting.plot_hypervolume(optimisation),
+        "hypervolume by label": plotting.plot_hypervolume({"cold": optimisation, "again": [optimisation, optimisation]}),
+    }
+    for name, fig in figures.items():
+        check_layout(fig, name)
+    for name in ("receptance", "decay rate"):  # shaded by default: the model's band is known
+        ax = figures[name].axes[0]
+        spans = [p for p in ax.patches if p.get_label().startswith("not resolved")]
+        assert len(spans) == 1 and spans[0].get_x() == pytest.approx(alpha.resolved), name
+    assert len(plotting.plot_receptance(f, [alpha], ["point"], resolved=None).axes[0].patches) == 0
+    with pytest.raises(vtb.ConfigError, match="baseline"):
+        plotting.plot_pareto(optimisation.moga.pop.F, optimisation.pareto)
+
+
+def test_no_axis_hides_its_values_behind_an_offset(runs):
+    b = np.arange(1.0, 6.0)
+    table = {"b_t": b, "rail_acc_max": 900 - b, "rail_acc_rms": 70 - b, "rail_acc_settle": 1.2290 + 0.00054 * b,
+             "slab_acc_max": 30 + b, "slab_acc_min": 29 + b}
+    base = dict(rail_acc_max=900.0, rail_acc_rms=70.0, rail_acc_settle=1.2293, slab_acc_max=30.0)
+    for fig in (plotting.plot_rail_indices(table, base), plotting.plot_histories(runs[0])):
+        fig.canvas.draw()
+        for ax in fig.axes:
+            assert ax.yaxis.get_major_formatter().get_offset() == "", ax.get_ylabel()

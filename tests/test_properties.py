@@ -94,7 +94,10 @@ def _moving_force_config(p1, p2):
     layers = [Layer("rail", 7800, 7.745e-3, 2.1e11, 3.217e-5, 40, RayleighRatio(0.02, 5, 500)), Layer("slab", 2500, 0.51, 3.9e10, 1.7e-3, 20, RayleighRatio(0.05, 5, 500))]
     couplings = [Coupling.grid("rail", "slab", 6e7, 4.77e4, 0.64, 32.0), Coupling("slab", "ground", "continuous", 1e8, 1e5)]
     forces = [MovingForce(p1, 1.0)] + ([MovingForce(p2, 4.0)] if p2 is not None else [])
-    return Config(structure=Structure(32.0, layers, couplings), speed=50.0, forces=forces, solver=Solver(dt=1e-4, t_end=0.2), output=vtb.Output([10.0, 16.0]))
+    # forces of any size: the linearity holds below the plausible wheel loads too
+    accept = [f"forces[{i}].magnitude" for i in range(len(forces))]
+    return Config(structure=Structure(32.0, layers, couplings), speed=50.0, forces=forces, solver=Solver(dt=1e-4, t_end=0.2), output=vtb.Output([10.0, 16.0]),
+                  accept_implausible=accept)
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -110,7 +113,7 @@ def test_linear_case_scales_with_the_load(p, factor):
         assert np.abs(factor * x - y).max() <= tol * np.abs(y).max()
     two = vtb.simulate(_moving_force_config(p, factor * p))
     other = copy.deepcopy(_moving_force_config(p, factor * p))
-    other.forces = [other.forces[1]]
+    other.forces, other.accept_implausible = [other.forces[1]], ["forces[0].magnitude"]
     o = vtb.simulate(other)
     assert np.abs(a.disp + o.disp - two.disp).max() <= 1e-12 * np.abs(two.disp).max()
     assert np.abs(a.acc + o.acc - two.acc).max() <= 1e-7 * np.abs(two.acc).max()

@@ -33,7 +33,7 @@ from .config.fields import (
     Vehicle,
     plausible_ranges,
 )
-from .errors import ConfigError, ConvergenceError, SolverError, StaleFileError, VtbError
+from .errors import ConfigError, ConvergenceError, MissingExtraError, OutputError, SolverError, StaleFileError, VtbError
 from .analysis.fesea import FeSeaReport, fesea_report
 from .config.irregularity import Irregularity, IrregularityWarning
 from .config.presets import crh3_car, example_config, examples, moving_load_config, paper_config, paper_irregularity, tids_around
@@ -64,7 +64,7 @@ from .bridge.report import bridge_check
 __all__ = [
     "Config", "Coupling", "Discretisation", "Layer", "MovingForce", "Output", "RayleighCoefficients",
     "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "QuarterCar", "Irregularity", "IrregularityWarning", "irregularity",
-    "ConfigError", "StaleFileError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
+    "ConfigError", "StaleFileError", "OutputError", "MissingExtraError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
     "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",

@@ -19,7 +19,8 @@ from .config.fields import Config
 from .config.gateway import __version__
 from .config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config, example_text, examples, paper_config, tids_around
 from .config.resolution import resolved_band
-from .errors import StaleFileError, VtbError, config_error
+from .errors import StaleFileError, VtbError, config_error, writing
+from .studies.journal import lock
 from .run.indices import A_RM, A_SM, metric_unit, rate
 from .run.simulate import simulate
 from .studies.grid import study
@@ -176,8 +177,16 @@ def _describe(cfg, label: str) -> list[str]:
 
 
 def cmd_simulate(args) -> int:
-    if args.out:
-        check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
+    if not args.out:
+        return _simulate(args)
+    check_out_dir(args.out, "--out", SIMULATE_FILES, args.force)
+    # A second `vtb simulate --out DIR` into the same folder is refused while this one runs
+    # (a lock the kernel drops when its holder dies), so no run's results are silently lost.
+    with lock(Path(args.out) / "vtb-simulate", "--out", "another vtb simulate"):
+        return _simulate(args)
+
+
+def _simulate(args) -> int:
     cfg = _load_config(args.config)
     t0 = time.perf_counter()
     res = simulate(cfg)
@@ -188,17 +197,20 @@ def cmd_simulate(args) -> int:
     _print_metrics(res.metrics())
     if args.out:
         out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        res.save(out / "result.npz")
-        (out / "metrics.json").write_text(json.dumps(res.metrics(), indent=2))
-        cfg.to_toml(out / "config.toml")
+        with writing("--out", out / "result.npz"):
+            res.save(out / "result.npz")
+        with writing("--out", out / "metrics.json"):
+            (out / "metrics.json").write_text(json.dumps(res.metrics(), indent=2))
+        with writing("--out", out / "config.toml"):
+            cfg.to_toml(out / "config.toml")
         if not args.no_plot:
             try:
                 from .analysis.plotting import plot_histories
             except ImportError:
                 print("matplotlib is not installed: no plot (pip install 'vtb[plot]')", file=sys.stderr)
             else:
-                plot_histories(res, out / "histories.png")
+                with writing("--out", out / "histories.png"):
+                    plot_histories(res, out / "histories.png")
         print(f"# wrote {out}/result.npz, metrics.json, config.toml" + ("" if args.no_plot else ", histories.png"))
     return 0
 
@@ -499,7 +511,11 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except VtbError as e:
-        print(f"vtb: {type(e).__name__}: {e}", file=sys.stderr)
+        print(f"vtb: {type(e).__name__}: {' '.join(str(e).split())}", file=sys.stderr)
+        return 2
+    except OSError as e:  # a file no vtb error wrapped: still one line naming it, and the cause
+        where = f" {e.filename!r}" if e.filename else ""
+        print(f"vtb: {type(e).__name__}:{where} {e.strerror or e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("vtb: interrupted", file=sys.stderr)

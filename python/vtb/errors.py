@@ -70,3 +70,65 @@ class ConvergenceError(VtbError, RuntimeError):
 
 class SolverError(VtbError, RuntimeError):
     """A numerical failure that valid input should not produce (e.g. an unsupported structure)."""
+
+
+class OutputError(VtbError, OSError):
+    """A file vtb writes could not be written (disk full, no permission, a read-only or missing
+    folder). ``path`` is the file, ``field`` the argument that named it (``out``,
+    ``checkpoint``), ``reason`` the cause as the system gave it and ``errno`` its number."""
+
+    def __init__(self, message: str, field: str | None = None, path: str | None = None, reason: str | None = None, errno: int | None = None):
+        VtbError.__init__(self, message)
+        self.field = field
+        self.path = path
+        self.reason = reason
+        self.errno = errno
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+    def __reduce__(self):
+        return (type(self), (self.args[0], self.field, self.path, self.reason, self.errno))
+
+
+def output_error(field: str, path, err: OSError) -> OutputError:
+    """An :class:`OutputError` for the OSError ``err`` met writing ``path`` (named by ``field``)."""
+    import errno as _errno
+    import os as _os
+
+    cause = {_errno.ENOSPC: "the disk is full", _errno.EDQUOT: "the disk quota is exceeded",
+             _errno.EACCES: "permission denied", _errno.EPERM: "permission denied",
+             _errno.EROFS: "the file system is read-only"}.get(err.errno) or (err.strerror or str(err))
+    reason = f"{cause} ({_errno.errorcode.get(err.errno, err.errno)})" if err.errno else cause
+    return OutputError(f"cannot write `{field}` = {_os.fspath(path)!r}: {reason}", field, _os.fspath(path), reason, err.errno)
+
+
+def writing(field: str, path):
+    """A context that turns an OSError met writing ``path`` into an :class:`OutputError`."""
+    import contextlib
+
+    @contextlib.contextmanager
+    def guard():
+        try:
+            yield
+        except OutputError:
+            raise
+        except OSError as e:
+            raise output_error(field, path, e) from e
+
+    return guard()
+
+
+class MissingExtraError(VtbError, ImportError):
+    """An optional dependency a method needs is not installed; ``extra`` names the package
+    extra that brings it (``pip install 'vtb[io]'``). Raised before any work is done."""
+
+    def __init__(self, message: str, extra: str | None = None):
+        VtbError.__init__(self, message)
+        self.extra = extra
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+    def __reduce__(self):
+        return (type(self), (self.args[0], self.extra))

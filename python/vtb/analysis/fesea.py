@@ -49,10 +49,10 @@ class FeSeaReport:
         return {c: cls.count(c) for c in ("below", "resonant", "above")}
 
     def to_pandas(self):
-        """The local modes as a :class:`pandas.DataFrame` (needs pandas)."""
-        import pandas as pd
+        """The local modes as a :class:`pandas.DataFrame` (needs pandas: the ``vtb[io]`` extra)."""
+        from ..run.tables import require_pandas
 
-        return pd.DataFrame({k: list(v) if k == "class" else np.asarray(v) for k, v in self.modes.items()})
+        return require_pandas().DataFrame({k: list(v) if k == "class" else np.asarray(v) for k, v in self.modes.items()})
 
     def __str__(self) -> str:
         f_r = self.omega_r / (2 * np.pi)

@@ -21,6 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..config.resolution import resolved_band
+from ..errors import config_error
 from ..run.indices import A_RM, A_RRMS, A_RST, A_SM, rate
 
 #: Width of a journal's single column (mm), the width of every figure.
@@ -45,6 +46,8 @@ STYLE = {
     "legend.handlelength": 2.6,
     "legend.borderaxespad": 0.3,
     "savefig.dpi": 300,
+    # Plain tick labels: an offset ("+1.229" above ticks of 0.00054) hides the values read.
+    "axes.formatter.useoffset": False,
 }
 #: Line styles of the traces after the first, so overlapping traces stay distinguishable in print.
 STYLES = ("-", "--", "-.", ":")
@@ -117,6 +120,17 @@ def _finish(fig: Figure, path) -> Figure:
     return fig
 
 
+def _known_band(resolved, series) -> Optional[float]:
+    """The top of the resolved band to shade above: ``resolved`` (Hz or None), or for
+    ``"auto"`` the lowest ``resolved`` the series carry (:class:`vtb.analysis.track.Spectrum`)."""
+    if isinstance(resolved, str) and resolved == "auto":
+        known = [s.resolved for s in series if getattr(s, "resolved", None) is not None]
+        return min(known) if known else None
+    if resolved is not None and (isinstance(resolved, bool) or not isinstance(resolved, (int, float)) or not resolved > 0):
+        raise config_error("resolved", resolved, 'must be "auto", a frequency > 0 (Hz) or None')
+    return resolved
+
+
 def shade_unresolved(ax, f_max: float, label: bool = True) -> None:
     """Greys the frequencies above ``f_max`` (Hz), the top of the band a model resolves."""
     lo, hi = ax.get_xlim()
@@ -134,22 +148,32 @@ def plot_histories(result, path=None, layers=("rail", "slab")) -> Figure:
     fig = figure(24.0 * rows)
     axes = fig.subplots(rows, 1, sharex=True)
     k = 0
+    # Each panel names its part inside the axes and keeps its y-label short (symbol and unit),
+    # so that the labels of 24 mm high panels do not run into each other.
     for name in names:
         axes[k].plot(result.t, result.displacement(name) * 1e3, color="k", lw=0.6)
-        axes[k].set_ylabel(f"{name} $w$ (mm)")
+        _panel(axes[k], name, "$w$ (mm)")
         axes[k + 1].plot(result.t, result.acceleration(name), color="k", lw=0.4)
-        axes[k + 1].set_ylabel(f"{name} $\\ddot w$ (m/s²)")
+        _panel(axes[k + 1], name, "$\\ddot w$ (m/s²)")
         k += 2
     if result.vehicle_disp.shape[1]:
         axes[k].plot(result.t, result.car_body_disp * 1e3, color="k", lw=0.7)
         axes[k + 1].plot(result.t, result.car_body_acc, color="k", lw=0.6)
-    axes[k].set_ylabel("car body $Z_c$ (mm)")
-    axes[k + 1].set_ylabel("car body $\\ddot Z_c$ (m/s²)")
+    _panel(axes[k], "car body", "$Z_c$ (mm)")
+    _panel(axes[k + 1], "car body", "$\\ddot Z_c$ (m/s²)")
+    fig.align_ylabels(axes)
     for ax in axes:
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("time $t$ (s)")
     fig.suptitle(f"x = {result.points[0]:g} m (displacement positive down)")
     return _finish(fig, path)
+
+
+def _panel(ax, part: str, label: str) -> None:
+    """A stacked panel: ``part`` written in its top-left corner, ``label`` its y-label."""
+    ax.set_ylabel(label)
+    ax.text(0.01, 0.95, part, transform=ax.transAxes, ha="left", va="top", fontsize=6.0,
+            bbox=dict(facecolor="white", edgecolor="none", pad=0.5, alpha=0.8))
 
 
 def _resolved(result, layer: str) -> Optional[float]:
@@ -196,10 +220,13 @@ def plot_third_octave(results: Sequence, labels: Sequence[str], layers: Sequence
 
 @styled
 def plot_receptance(frequencies, receptances: Sequence, labels: Sequence[str], path=None, pinned_pinned: Optional[float] = None,
-                    resolved: Optional[float] = None) -> Figure:
+                    resolved="auto") -> Figure:
     """Magnitude and phase of point or transfer receptances (m/N, :func:`vtb.analysis.track.receptance`)
-    against frequency (Hz); ``pinned_pinned`` marks the first pinned–pinned frequency (Hz),
-    ``resolved`` shades the frequencies above a model's resolved band (Hz)."""
+    against frequency (Hz); ``pinned_pinned`` marks the first pinned–pinned frequency (Hz).
+    The frequencies above the band the model resolves are shaded: ``resolved`` = ``"auto"``
+    (default) takes it from the receptances :func:`vtb.receptance` returned (the lowest of
+    theirs), a number (Hz) gives it, ``None`` shades nothing."""
+    resolved = _known_band(resolved, receptances)
     fig = figure(80.0)
     mag, ph = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
     f = np.asarray(frequencies)
@@ -226,9 +253,11 @@ def plot_receptance(frequencies, receptances: Sequence, labels: Sequence[str], p
 
 
 @styled
-def plot_decay_rate(frequencies, decay_rates: Sequence, labels: Sequence[str], path=None, resolved: Optional[float] = None) -> Figure:
+def plot_decay_rate(frequencies, decay_rates: Sequence, labels: Sequence[str], path=None, resolved="auto") -> Figure:
     """Track decay rates (dB/m, :func:`vtb.analysis.track.decay_rate`) against frequency (Hz);
-    ``resolved`` shades the frequencies above a model's resolved band (Hz)."""
+    the frequencies above the model's resolved band are shaded (``resolved`` as in
+    :func:`plot_receptance`: ``"auto"`` from the decay rates :func:`vtb.decay_rate` returned)."""
+    resolved = _known_band(resolved, decay_rates)
     fig = figure(55.0)
     ax = fig.subplots()
     for i, (dr, label) in enumerate(zip(decay_rates, labels)):
@@ -335,10 +364,13 @@ def plot_slab_indices(table: dict, baseline: dict, path=None) -> Figure:
 
 
 @styled
-def plot_hypervolume(histories: dict, path=None) -> Figure:
+def plot_hypervolume(histories, path=None) -> Figure:
     """The feasible front's hypervolume against the evaluations, one trace per optimisation
     run (``{label: [MogaGeneration, …]}``), or one style per label for several runs (``{label:
-    [[MogaGeneration, …], …]}``, e.g. one per seed)."""
+    [[MogaGeneration, …], …]}``, e.g. one per seed). A result :func:`vtb.optimize` returns
+    (:class:`vtb.OptimizationResult`, :class:`vtb.ParetoResult`, :class:`vtb.optim.Result`), a
+    list of them or a dict of them by label is taken as its history."""
+    histories = _histories(histories)
     fig = figure(50.0)
     ax = fig.subplots()
     for i, (label, runs) in enumerate(histories.items()):
@@ -353,10 +385,44 @@ def plot_hypervolume(histories: dict, path=None) -> Figure:
     return _finish(fig, path)
 
 
+def _history(run) -> list:
+    """The generations of one optimisation run (a result of :func:`vtb.optimize` or of
+    :func:`vtb.optim.minimize`, or the list itself)."""
+    moga = getattr(run, "moga", run)
+    history = getattr(moga, "history", run)
+    if not isinstance(history, list):
+        raise config_error("histories", type(run).__name__, "expected an optimisation result or a list of its generations")
+    return history
+
+
+def _histories(histories) -> dict:
+    if not isinstance(histories, dict):
+        histories = {"optimisation": histories}
+    out = {}
+    for label, runs in histories.items():
+        if isinstance(runs, list) and runs and not hasattr(runs[0], "n_evals"):
+            out[label] = [_history(r) for r in runs]  # several runs
+        else:
+            out[label] = _history(runs)
+    return out
+
+
 @styled
-def plot_pareto(population, pareto: dict, baseline: dict, reference: Optional[tuple] = None, path=None) -> Figure:
+def plot_pareto(population, pareto: Optional[dict] = None, baseline: Optional[dict] = None, reference: Optional[tuple] = None,
+                path=None) -> Figure:
     """The article's Fig. 7: the final population and the Pareto set in (a_rm, a_sm), the
-    uncontrolled values and the article's solution 1 (``reference``)."""
+    uncontrolled values and the article's solution 1 (``reference``). ``population``: the
+    final population's objectives (n × 2), or the :class:`vtb.OptimizationResult`
+    :func:`vtb.optimize` returned — its population, Pareto set and baseline then come from it."""
+    if hasattr(population, "moga") and hasattr(population, "pareto"):
+        result = population
+        population = result.moga.pop.F
+        pareto = result.pareto if pareto is None else pareto
+        baseline = getattr(result, "baseline", None) if baseline is None else baseline
+    if pareto is None or baseline is None:
+        raise config_error("pareto" if pareto is None else "baseline", None,
+                           "needed unless the first argument is the OptimizationResult vtb.optimize returned")
+    population = np.asarray(population, dtype=float)
     fig = figure(62.0)
     ax = fig.subplots()
     ax.scatter(population[:, 0], population[:, 1], s=5, c="0.7", lw=0, label="final population")

@@ -57,6 +57,7 @@ Limitations
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Optional, Union
 
@@ -66,8 +67,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..config.fields import Config
-from ..config.resolution import warn_beyond
-from ..errors import SolverError, config_error
+from ..config.resolution import resolved_band, warn_beyond
+from ..errors import SolverError, VtbError, config_error
 from .eigen import EigshFailed, System, _float_array, assemble, checked_frequencies, checked_positions, layer_index, shape_matrix, sliced_eigsh
 
 __all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT"]
@@ -226,7 +227,30 @@ def receptance(
     force = shape_matrix(system, li, xf)
     resp = shape_matrix(system, ri, xr)
     out = _harmonic_solve(system, freqs, force, resp)[:, :, 0]
-    return out[:, 0] if scalar else out
+    return Spectrum.of(out[:, 0] if scalar else out, config, config.structure.layers[ri].name)
+
+
+class Spectrum(np.ndarray):
+    """A frequency-domain answer (:func:`receptance`, :func:`decay_rate`): a numpy array that
+    also carries ``resolved`` (Hz), the top of the band its model's basis resolves for the
+    layer (``None`` when unknown), so that the figures shade the unresolved band by default."""
+
+    resolved = None
+
+    @classmethod
+    def of(cls, values, config, layer: str) -> "Spectrum":
+        out = np.asarray(values).view(cls)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                band = resolved_band(config).layers.get(layer)
+            out.resolved = None if band is None else float(band.basis_f_max)
+        except (VtbError, ValueError, TypeError):
+            out.resolved = None
+        return out
+
+    def __array_finalize__(self, obj) -> None:
+        self.resolved = getattr(obj, "resolved", None)
 
 
 # ---------------------------------------------------------------------------- decay rate
@@ -358,7 +382,7 @@ def decay_rate(
     if np.any(a0 == 0.0):
         raise config_error("x0", x0v, "the point receptance vanishes there (a rigid support?)")
     s = (np.abs(a) ** 2 / a0[:, None]) @ _estimator_weights(d)
-    return DB_PER_NEPER_ENERGY / s
+    return Spectrum.of(DB_PER_NEPER_ENERGY / s, config, config.structure.layers[li].name)
 
 
 # ---------------------------------------------------------------------------- modes

@@ -375,7 +375,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
                 out_dir.mkdir(parents=True, exist_ok=True)
                 journal = out_dir / f"v{v:g}_seed{s}.csv"
                 stack.enter_context(jr.lock(journal))
-                known = jr.open_rows(journal, cfg, LAYOUT)
+                known = jr.open_rows(journal, cfg, LAYOUT, kind="robust sweep")
             rows, left = jr.reuse(known, grid_cases, LAYOUT)
             state.append([v, s, cfg, journal, rows, left])
         total = len(todo) * len(grid_cases)

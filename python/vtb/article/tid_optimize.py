@@ -21,7 +21,9 @@ from typing import Optional, Union
 import numpy as np
 
 from . import robust
+from ..config import args
 from ..config.fields import Config
+from ..optim.driver import check_budget
 from ..errors import config_error, stale_file_error
 from ..run.indices import ARTICLE_OBJECTIVES, CONSTRAINTS, METRICS, RAIL_RATE
 from ..run.simulate import simulate
@@ -152,6 +154,13 @@ def optimize(
     Returns a :class:`vtb.article.robust.RobustOptimizationResult`; ``warm_start`` must then be a
     :class:`vtb.article.robust.RobustSweep` of the same cases.
     """
+    check_budget(pop_size, n_gen, seed, algorithm)
+    if not isinstance(config, Config):
+        raise config_error("config", type(config).__name__, "expected a vtb.Config")
+    args.whole("threads", threads, 1, none=True)
+    args.path("checkpoint", checkpoint, none=True)
+    if not (isinstance(progress, bool) or callable(progress)):
+        raise config_error("progress", progress, "must be True, False or a callable")
     if variables is not None:
         if samples is not None or speeds is not None or warm_start is not None:
             raise config_error("variables", list(variables), "samples, speeds and warm_start belong to the article's problem; a study over other fields runs one case")

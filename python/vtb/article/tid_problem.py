@@ -181,8 +181,9 @@ def plan(config: Config, b_t: Sequence[float], k_t: Sequence[float], c_t: Sequen
 def read_journal(path: Union[str, Path], field: str = "path") -> SweepResult:
     """A sweep journal as a :class:`SweepResult`, without running anything: the configuration
     of its stamp and one row per key (the rule of :func:`sweep` for repeated keys), the baseline
-    as case 0 and the TID cases numbered in their order in the file. A malformed journal raises
-    a :class:`ConfigError` naming ``field`` and the line."""
+    as case 0 and the TID cases numbered in the order of their (b_t, k_t, c_t), not of the file
+    (:func:`vtb.studies.grid.read_journal`). A malformed journal raises a :class:`ConfigError`
+    naming ``field`` and the line."""
     return studies.read_journal(path, field, LAYOUT, SweepResult)
 
 

@@ -104,7 +104,13 @@ class Coupling(StrictFields):
 
     @classmethod
     def grid(cls, upper: str, lower: str, stiffness: float, damping: float, spacing: float, length: float, first: float = 0.0) -> "Coupling":
-        """Discrete springs every ``spacing`` from ``first`` up to ``length`` (inclusive)."""
+        """Discrete springs every ``spacing`` from ``first`` up to ``length`` (inclusive); at
+        most :data:`MAX_GRID_POSITIONS` of them."""
+        for name, v in (("spacing", spacing), ("length", length), ("first", first)):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (name == "spacing" and v <= 0):
+                raise config_error(name, v, "must be a finite number" + (" > 0 (m)" if name == "spacing" else " (m)"))
+        if (length - first) / spacing > MAX_GRID_POSITIONS:
+            raise config_error("spacing", spacing, f"lays {(length - first) / spacing:.3g} springs over [{first:g}, {length:g}] m (at most {MAX_GRID_POSITIONS})")
         n = int(round((length - first) / spacing + 1e-9)) + 1
         return cls(upper, lower, "discrete", stiffness, damping, [first + i * spacing for i in range(n) if first + i * spacing <= length + 1e-9])
 
@@ -299,10 +305,11 @@ class Config(StrictFields):
         ``wavelength`` or a dip's ``length`` twice; ``None`` without a wavelength. The core
         takes its default ω_r from it (``discretisation.excitation_wavelengths``)."""
         irr = self.irregularity
-        if not isinstance(getattr(irr, "kind", None), str):
-            return None  # a kind that is no name is refused by the irregularity's own check
+        kind = getattr(irr, "kind", None)
+        if not isinstance(kind, str):
+            return None  # a bad irregularity or kind is named by the irregularity's own check
         band = {"corrugation": ("wavelength", "wavelength"), "cosine_dip": ("length", "length")}.get(
-            irr.kind, ("wavelength_min", "wavelength_max") if irr.kind in SPECTRA else None)
+            kind, ("wavelength_min", "wavelength_max") if kind in SPECTRA else None)
         if band is None:
             return None
         values = [getattr(irr, name, None) for name in band]
@@ -584,7 +591,10 @@ def structure_json(config: Config, text: Optional[str] = None) -> str:
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
     d = json.loads(config.to_core_json() if text is None else text)  # resolves a hybrid's default ω_r from the irregularity
     d["vehicles"] = []
-    d["forces"] = [{"magnitude": 0.0, "x0": 0.0, "layer": None}]
+    top = (d.get("structure") or {}).get("layers") or [{}]
+    start = top[0].get("start") if isinstance(top[0], dict) else None
+    # on the top layer, wherever it starts: a force that never reaches its layer is refused
+    d["forces"] = [{"magnitude": 0.0, "x0": start if isinstance(start, (int, float)) else 0.0, "layer": None}]
     d["speed"] = 0.0
     d["solver"] = to_plain(Solver(dt=1e-3, t_end=1e-3, initial_state="rest"))
     d["output"] = {"points": []}
@@ -602,3 +612,37 @@ def plausible_ranges() -> list:
     outside its range raises :class:`vtb.ConfigError` naming the field, the value and the likely
     unit mistake, unless ``Config.accept_implausible`` lists the field's path."""
     return [dict(field=f, min=lo, max=hi, unit=u, covers=c) for f, lo, hi, u, c in gateway.plausible_ranges()]
+
+
+#: The most springs :meth:`Coupling.grid` lays in one coupling (fasteners every 0.6 m over a
+#: 100 km viaduct are 170 000).
+MAX_GRID_POSITIONS = 1_000_000
+
+
+def checked_config(config, name: str = "config") -> "Config":
+    """``config`` if it is a :class:`Config` whose every field has its type; raises
+    :class:`~vtb.errors.ConfigError` naming ``name`` or the field otherwise (the first step of
+    a function that rearranges a configuration, before any work)."""
+    if not isinstance(config, Config):
+        raise config_error(name, type(config).__name__, "expected a vtb.Config")
+    check_types(config)
+    return config
+
+
+def check_new_length(config: "Config", field: str, value: float, given=None) -> None:
+    """A structure of ``value`` m, which the argument ``field`` would make of ``config``, within
+    the core's plausible ``structure.length`` (unless ``config.accept_implausible`` lists it)
+    and within the springs :data:`MAX_GRID_POSITIONS` lays; checked before anything is laid.
+    ``given``: the argument's value (default ``value``)."""
+    given = value if given is None else given
+    row = next(r for r in plausible_ranges() if r["field"] == "structure.length")
+    accepted = isinstance(config.accept_implausible, list) and "structure.length" in config.accept_implausible
+    if value > row["max"] and not accepted:
+        raise config_error(field, given, f"makes a structure {value:g} m long, beyond the plausible {row['min']:g} … {row['max']:g} m "
+                                         f"of structure.length ({row['covers']}; docs/limits.md); if it is meant, list "
+                                         "\"structure.length\" in accept_implausible")
+    spacing = min((cp.positions[1] - cp.positions[0] for cp in config.structure.couplings
+                   if cp.kind == "discrete" and len(cp.positions) >= 2 and cp.positions[1] > cp.positions[0]), default=None)
+    if spacing is not None and value / spacing > MAX_GRID_POSITIONS:
+        raise config_error(field, given, f"makes a structure {value:g} m long, which would lay {value / spacing:.3g} springs "
+                                         f"{spacing:g} m apart (at most {MAX_GRID_POSITIONS})")

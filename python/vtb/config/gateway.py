@@ -31,10 +31,11 @@ def check_plausible(text: str) -> None:
     _core.check_plausible(text)
 
 
-def validate(text: str, *profile) -> None:
+def validate(text: str, *profile, full: bool = False) -> None:
     """The core's whole validation of a run, against its sampled irregularity ``profile``
-    (:meth:`vtb.config.prepare.SampledProfile.core_args`) when given."""
-    _core.validate(text, *profile)
+    (:meth:`vtb.config.prepare.SampledProfile.core_args`) when given; ``full``: the run records
+    full histories (:func:`vtb.simulate`), which must fit the memory budget too."""
+    _core.validate(text, *profile, full=full)
 
 
 def plausible_ranges() -> list:

@@ -255,6 +255,12 @@ def _grid_size(x_min: float, x_max: float, dx: float, memory_budget: Optional[fl
 # --------------------------------------------------------------------------------------------
 
 
+#: The largest depth, step, crown or amplitude (m) of a shape or defect: a rail defect is
+#: millimetres deep; beyond this the value is a unit mistake, not a track.
+MAX_HEIGHT = 0.1
+_HEIGHTS = ("depth", "step", "crown", "amplitude")
+
+
 @dataclass
 class Irregularity(StrictFields):
     """Irregularity of the rail top, r(x) (m, dip positive): a random profile drawn from a
@@ -346,12 +352,15 @@ class Irregularity(StrictFields):
     wheel_radius: Optional[float] = None
     parts: list = field(default_factory=list)
 
-    def validate(self, speed: Optional[float] = None, dt: Optional[float] = None, wheel_radii: Optional[Sequence[float]] = None, path: str = "irregularity") -> None:
+    def validate(self, speed: Optional[float] = None, dt: Optional[float] = None, wheel_radii: Optional[Sequence[float]] = None, path: str = "irregularity",
+                 extent: Optional[tuple] = None) -> None:
         """Raises :class:`~vtb.errors.ConfigError` for an unusable setting. With ``speed`` and
         ``dt``, also rejects wavelengths the time step cannot resolve: the shortest wavelength
         must be at least 2·v·Δt (the Nyquist limit of the excitation f = v/λ). With
         ``wheel_radii`` (m, one per wheel of the run), a flat's wheel must be one of the run's
-        and the flat must fit on it."""
+        and the flat must fit on it. With ``extent`` = (start, end) (m; the structure and the
+        wheels' travel), a rail defect, a dip, a corrugation or a sampled stretch that lies
+        wholly outside it is refused: the run would silently return the smooth rail's answer."""
         p = path
         if not isinstance(self.parts, (list, tuple)):
             raise config_error(f"{p}.parts", self.parts, "expected a list of vtb.Irregularity")
@@ -360,11 +369,14 @@ class Irregularity(StrictFields):
                 raise config_error(f"{p}.parts[{i}]", part, "expected a vtb.Irregularity")
             if part.parts:
                 raise config_error(f"{p}.parts[{i}].parts", part.parts, "a part has no parts of its own")
-            part.validate(speed, dt, wheel_radii, f"{p}.parts[{i}]")
+            part.validate(speed, dt, wheel_radii, f"{p}.parts[{i}]", extent)
 
         def finite(name, v, positive=False):
             if not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
                 raise config_error(f"{p}.{name}", v, "must be a finite number" + (" > 0" if positive else ""))
+            if name in _HEIGHTS and abs(v) > MAX_HEIGHT:
+                raise config_error(f"{p}.{name}", v, f"a height of the rail or wheel tread beyond {MAX_HEIGHT:g} m is no "
+                                                     "irregularity (a value in mm given in m?)")
 
         if self.kind not in SPECTRA + SHAPES + DEFECTS:
             raise config_error(f"{p}.kind", self.kind, f"unknown kind (known: {', '.join(SPECTRA + SHAPES + DEFECTS)})")
@@ -418,6 +430,12 @@ class Irregularity(StrictFields):
                 finite("wheel_radius", self.wheel_radius)
                 if self.wheel_radius < 0 or (self.kind == "wheel_flat" and self.wheel_radius == 0):
                     raise config_error(f"{p}.wheel_radius", self.wheel_radius, "must be > 0" if self.kind == "wheel_flat" else "must be >= 0")
+                from . import gateway  # the wheels' plausible range is the core's
+
+                top = next(hi for f, _, hi, *_ in gateway.plausible_ranges() if f == "vehicles[*].wheel_radius")
+                if self.wheel_radius > top:
+                    raise config_error(f"{p}.wheel_radius", self.wheel_radius, f"beyond the plausible wheel radius of {top:g} m "
+                                                                              "(vehicles[*].wheel_radius, docs/limits.md)")
             if self.kind == "rail_joint":
                 finite("step", self.step)
             elif self.kind == "dipped_weld":
@@ -449,6 +467,27 @@ class Irregularity(StrictFields):
             bad = np.flatnonzero(~np.isfinite(v))
             if bad.size:
                 raise config_error(f"{p}.values[{bad[0]}]", float(v[bad[0]]), "must be finite")
+
+        if extent is not None:
+            self._check_within(extent, p)
+
+    def _check_within(self, extent: tuple, p: str) -> None:
+        """The shape's stretch meets ``extent`` (see :meth:`validate`)."""
+        if self.kind == "cosine_dip":
+            name, lo, hi = "position", self.position, self.position + self.length
+        elif self.kind in ("rail_joint", "dipped_weld"):
+            name, lo, hi = "position", self.position - self.length / 2, self.position + self.length / 2
+        elif self.kind == "corrugation":
+            name, lo, hi = "start", self.start, self.end
+        elif self.kind == "sampled":
+            name, lo, hi = "x0", self.x0, self.x0 + (len(self.values) - 1) * float(self.dx)
+        else:
+            return
+        a, b = extent
+        if hi < a or lo > b:
+            raise config_error(f"{p}.{name}", getattr(self, name),
+                               f"the {self.kind.replace('_', ' ')} over [{lo:g}, {hi:g}] m lies outside the rail the wheels roll over, "
+                               f"[{a:g}, {b:g}] m (the structure and the wheels' travel): the run would return the smooth rail's answer")
 
     def sample_spacing(self) -> float:
         if self.dx is not None:

@@ -22,7 +22,7 @@ import numpy as np
 from . import gateway
 from .fields import Config, check_types, to_plain
 from .irregularity import Irregularity
-from .resolution import check_excitation, real_or_none, resolved_band, warn_beyond
+from .resolution import ResolutionWarning, check_excitation, real_or_none, resolved_band, warn_beyond
 from ..errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
@@ -44,9 +44,11 @@ class SampledProfile(NamedTuple):
         return self.x0, self.dx, self.values if self.values.size else None, self.treads
 
 
-def prepare(cfg: Config) -> tuple[str, SampledProfile]:
+def prepare(cfg: Config, full: bool = False) -> tuple[str, SampledProfile]:
     """The core JSON of a configuration and its irregularity profile, the plausible ranges and
-    the irregularity checked and the resolution warnings given (module docstring)."""
+    the irregularity checked and the resolution warnings given (module docstring); every check
+    that needs no profile is made before the profile is drawn (``full``: for a run that records
+    full histories)."""
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
     text = cfg.to_core_json()
@@ -57,12 +59,27 @@ def prepare(cfg: Config) -> tuple[str, SampledProfile]:
     check_types(cfg.irregularity, "irregularity")
     vehicles = cfg.vehicles if isinstance(cfg.vehicles, list) else []
     cfg.irregularity.validate(speed=real_or_none(cfg.speed), dt=real_or_none(getattr(cfg.solver, "dt", None)),
-                              wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)])
+                              wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)],
+                              extent=_rolled_extent(cfg, text))
     _warn_band_limit(cfg, text)
     _check_excitation(cfg, text)
-    if any(q.kind == "wheel_flat" for q in (cfg.irregularity, *cfg.irregularity.parts)):
-        gateway.validate(text)  # a flat is sampled on its vehicle's wheel: a bad wheel is named first
+    # Every check that needs no profile (a run too long, a wheel crossing a rail end, the memory
+    # budget) answers in microseconds: before the profile, which may take seconds to draw.
+    gateway.validate(text, full=full)
     return text, irregularity_profile(cfg, text)
+
+
+def _rolled_extent(cfg: Config, text: str) -> Optional[tuple]:
+    """The stretch (m) the irregularity is drawn over: the structure and every wheel's travel
+    (``None`` when the core refuses the configuration; the run then names the field)."""
+    L = real_or_none(getattr(cfg.structure, "length", None))
+    if L is None or L <= 0:
+        return None
+    try:
+        travel = gateway.wheel_travel(text)
+    except (VtbError, ValueError, TypeError):
+        return None
+    return (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
 
 
 def _warn_band_limit(cfg: Config, text: str) -> None:
@@ -83,8 +100,13 @@ def _warn_band_limit(cfg: Config, text: str) -> None:
         if bands:
             # the top band's upper edge: exact base-10 midband · 10^(1/20) (docs/spectra.md)
             top = 1000.0 * 10.0 ** (round(10.0 * np.log10(max(bands) / 1000.0)) / 10.0 + 0.05)
-            for layer in layers:
-                warn_beyond(cfg, layer.name, top, f"output.band_levels ({max(bands):g} Hz band, {layer.name})", band=resolved)
+            # one warning for the cause (the top band), naming every layer it exceeds
+            beyond = [(l.name, b.f_max, b.limited_by) for l in layers
+                      if (b := resolved.layers.get(l.name)) is not None and top > b.f_max]
+            if beyond:
+                where = "; ".join(f"{name} {f:.0f} Hz (its {by})" for name, f, by in beyond)
+                warnings.warn(f"output.band_levels ({max(bands):g} Hz band) reaches {top:.0f} Hz, beyond the band this "
+                              f"discretisation resolves for {where} (vtb.resolved_band(config))", ResolutionWarning, stacklevel=4)
     except (VtbError, AttributeError, TypeError):
         pass
 

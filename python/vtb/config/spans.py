@@ -13,11 +13,12 @@ same wavelengths.
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Sequence, Union
 
 import numpy as np
 
-from .fields import Config, Coupling
+from .fields import Config, Coupling, check_new_length, checked_config
 from ..errors import config_error
 
 #: Stiffness (N/m) of a rigid support: the article's piers.
@@ -25,6 +26,8 @@ RIGID = 1e15
 #: Distance (m) from a simply supported girder's end to its bearing: the standard 32 m box
 #: girder of Chinese high-speed lines is 32.6 m long with 31.5 m between bearings.
 BEARING_OFFSET = 0.55
+#: The most spans :func:`spans` takes (a 100 km viaduct of 32 m spans has about 3 000).
+MAX_SPANS = 10_000
 
 
 def spans(config: Config, lengths: Sequence[float], pier_stiffness: Union[float, Sequence[float]] = RIGID,
@@ -47,13 +50,22 @@ def spans(config: Config, lengths: Sequence[float], pier_stiffness: Union[float,
     positions (the run checks them against the new length).
 
     Raises :class:`vtb.ConfigError` naming the argument for an empty or non-positive list of
-    lengths, or a per-support list of the wrong length or with negative values."""
-    lengths = [float(v) for v in _as_list(lengths, "lengths")]
+    lengths (or one of a non-number), more than :data:`MAX_SPANS` spans, a total length beyond
+    the plausible ``structure.length`` (docs/limits.md), a per-support list of the wrong length
+    or with negative values, or a field of ``config`` of the wrong type — all before any work."""
+    checked_config(config)
+    lengths = _as_list(lengths, "lengths")
     if not lengths:
         raise config_error("lengths", lengths, "needs at least one span")
     for i, v in enumerate(lengths):
-        if not math.isfinite(v) or v <= 0:
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v) or v <= 0:
             raise config_error(f"lengths[{i}]", v, "must be a finite length > 0 (m)")
+    lengths = [float(v) for v in lengths]
+    if len(lengths) > MAX_SPANS:
+        raise config_error("lengths", f"{len(lengths)} spans", f"at most {MAX_SPANS} spans")
+    if not isinstance(simply_supported, bool):
+        raise config_error("simply_supported", simply_supported, "must be True or False")
+    check_new_length(config, "lengths", math.fsum(lengths))
     ends = np.concatenate(([0.0], np.cumsum(lengths)))
     supports = ends
     if simply_supported:
@@ -74,6 +86,8 @@ def spans(config: Config, lengths: Sequence[float], pier_stiffness: Union[float,
                            "the bridge already covers part of the structure: re-span it before adding track zones")
     bridge = st.layers[-1].name
     old, new = float(st.length), float(ends[-1])
+    if not math.isfinite(old) or old <= 0:
+        raise config_error("structure.length", st.length, "must be a finite length > 0 (m)")
     couplings = []
     for cp in st.couplings:
         if cp.upper == bridge and cp.lower == "ground" and cp.kind == "discrete":
@@ -103,7 +117,7 @@ def spans(config: Config, lengths: Sequence[float], pier_stiffness: Union[float,
 
 
 def _as_list(v, name: str) -> list:
-    if isinstance(v, (str, bytes)) or not hasattr(v, "__iter__"):
+    if isinstance(v, (str, bytes, dict, set)) or not hasattr(v, "__iter__") or getattr(v, "ndim", 1) != 1:
         raise config_error(name, v, "expected a list of numbers")
     return list(v)
 

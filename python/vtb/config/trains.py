@@ -12,14 +12,19 @@ and returns their :class:`~vtb.config.Vehicle` s, ready for ``Config.vehicles``;
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 from typing import Optional
 
 from . import gateway
-from .fields import Vehicle
+from .fields import Vehicle, check_types
 from ..errors import config_error
 
 _LIBRARY = {t["name"]: t for t in gateway.train_library()}
+#: The most cars :func:`train` lays (a consist is at most a few hundred metres; ten 16-car
+#: double units is far beyond any service).
+MAX_CARS = 160
 
 
 @dataclass(frozen=True)
@@ -66,18 +71,27 @@ def train(name: str = "crh3", cars: Optional[int] = None, x_front: float = 0.0, 
     Raises
     ------
     ConfigError
-        Unknown train, a car count below 1 or an unknown vehicle field.
+        Unknown train, a car count outside 1 … :data:`MAX_CARS`, a non-finite or non-numeric
+        ``x_front``, an unknown vehicle field or a value of the wrong type for one (checked
+        before any car is laid).
     """
-    if name not in _LIBRARY:
+    if not isinstance(name, str) or name not in _LIBRARY:
         raise config_error("name", name, f"unknown train (known: {sorted(_LIBRARY)})")
     formation = _LIBRARY[name]["cars"]
     n = len(formation) if cars is None else cars
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise config_error("cars", cars, "must be a whole number of cars >= 1")
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or not 1 <= n <= MAX_CARS:
+        raise config_error("cars", cars, f"must be a whole number of cars from 1 to {MAX_CARS}")
+    n = int(n)
+    if isinstance(x_front, bool) or not isinstance(x_front, numbers.Real) or not math.isfinite(x_front):
+        raise config_error("x_front", x_front, "must be a finite position (m)")
     known = set(Vehicle.__dataclass_fields__) - {"x_front"}
     for f in fields:
         if f not in known:
             raise config_error(f, fields[f], f"not a vehicle field (known: {sorted(known)})")
+    probe = Vehicle(**formation[0]["vehicle"])
+    for f, value in fields.items():
+        setattr(probe, f, value)
+    check_types(probe)
     out, x = [], float(x_front)
     for i in range(n):
         car = formation[i % len(formation)]

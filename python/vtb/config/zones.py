@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from typing import Optional
 
-from .fields import Config, Coupling
+from .fields import Config, Coupling, check_new_length, checked_config
 from ..errors import config_error
 
 #: Ground support of an embankment per unit length (N/m²): a subgrade modulus K30 = 190 MPa/m,
@@ -58,6 +58,7 @@ def track_zones(config: Config, approach: float = 50.0, exit: float = 50.0,
 
     Needs a finite-element structure (the bridge covers part of it) whose upper layers span
     the whole length. Raises :class:`vtb.ConfigError` naming the argument or field."""
+    checked_config(config)
     for name, v in (("approach", approach), ("exit", exit)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
             raise config_error(name, v, "must be a finite length >= 0 (m)")
@@ -69,6 +70,12 @@ def track_zones(config: Config, approach: float = 50.0, exit: float = 50.0,
     for name, v in (("approach", approach), ("exit", exit)):
         if v < edge_ramp:
             raise config_error(name, v, f"must be at least edge_ramp = {edge_ramp:g} m: the hand-over to the rigid track must not reach the bridge")
+    if tail is not None and (isinstance(tail, bool) or not isinstance(tail, (int, float)) or not math.isfinite(tail) or tail < 0):
+        raise config_error("tail", tail, "must be a finite duration >= 0 (s) or None")
+    L = config.structure.length
+    if not math.isfinite(L) or L <= 0:
+        raise config_error("structure.length", L, "must be a finite length > 0 (m)")
+    check_new_length(config, "exit" if exit > approach else "approach", float(approach) + L + float(exit), max(approach, exit))
     if config.discretisation.method != "fem":
         raise config_error("discretisation.method", config.discretisation.method,
                            "track zones need finite elements: the bridge covers only part of the structure")

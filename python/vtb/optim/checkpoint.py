@@ -18,6 +18,13 @@ from ..errors import config_error, stale_file_error
 from .problem import Generation
 
 _CHECKPOINT_FORMAT = "vtb.moga checkpoint 1"
+_FORMAT_NAME, _FORMAT_NUMBER = _CHECKPOINT_FORMAT.rsplit(" ", 1)
+
+
+def _version() -> str:
+    from ..config.gateway import __version__
+
+    return __version__
 
 
 def _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, extra) -> dict:
@@ -44,10 +51,44 @@ def _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, g
     return identity
 
 
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+def clean_stale_temps(directory: Path, prefix: str) -> list:
+    """Removes the temporary files ``<prefix><pid>.<anything>.tmp`` in ``directory`` whose
+    writer (process ``pid`` on this machine) is dead — what a SIGKILL in the middle of a write
+    leaves behind. Returns the paths removed."""
+    removed = []
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return removed
+    for name in names:
+        if not (name.startswith(prefix) and name.endswith(".tmp")):
+            continue
+        pid = name[len(prefix):].split(".", 1)[0]
+        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            try:
+                os.unlink(os.path.join(directory, name))
+                removed.append(Path(directory) / name)
+            except OSError:
+                pass
+    return removed
+
+
 def write_atomically(path: Path, write: Callable) -> None:
     """Replaces ``path`` by what ``write(binary file)`` writes, atomically: into a temporary file
     of the same directory, fsynced, renamed over ``path``, and the directory fsynced, so that a
-    crash leaves either the old file or the new one, never a mixture."""
+    crash leaves either the old file or the new one, never a mixture. The temporary files of
+    ``path`` a killed writer left are removed first (:func:`clean_stale_temps`)."""
+    clean_stale_temps(path.parent, f".{path.name}.")
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, unlike mkstemp's 0600
     try:
@@ -68,7 +109,7 @@ def write_atomically(path: Path, write: Callable) -> None:
 
 def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, history: list, message: str) -> None:
     header = dict(
-        format=_CHECKPOINT_FORMAT, identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
+        format=_CHECKPOINT_FORMAT, vtb=_version(), identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
         message=message, history=[asdict(h) for h in history],
     )
     write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
@@ -92,8 +133,19 @@ def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tupl
             state = {k: z[k] for k in z.files if k != "header"}
     except (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
         raise config_error("checkpoint", str(path), f"is not a readable vtb.moga checkpoint ({type(e).__name__}: {e})") from None
-    if not isinstance(header, dict) or header.get("format") != _CHECKPOINT_FORMAT:
+    fmt = header.get("format") if isinstance(header, dict) else None
+    if isinstance(fmt, str) and fmt.startswith(_FORMAT_NAME + " ") and fmt != _CHECKPOINT_FORMAT:
+        number = fmt[len(_FORMAT_NAME) + 1:]
+        newer = number.isdigit() and int(number) > int(_FORMAT_NUMBER)
+        raise stale_file_error("checkpoint", path, (f"was written by a newer vtb ({header.get('vtb', 'unknown version')}, {fmt!r}) that this vtb "
+                                                    f"{_version()} cannot read: upgrade vtb, or delete it to start afresh") if newer else
+                               f"is a {fmt!r} file of an older vtb; this vtb reads {_CHECKPOINT_FORMAT!r}: delete it to start afresh")
+    if fmt != _CHECKPOINT_FORMAT:
         raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")
+    written_by = header.get("vtb")
+    if written_by is not None and written_by != _version():
+        raise stale_file_error("checkpoint", path, f"was written by vtb {written_by}; this vtb {_version()} may give other results, and a "
+                                                   "resumed run must not mix the two: delete it or choose another path")
     saved = header.get("identity")
     if saved != identity:
         differ = sorted(k for k in identity if not isinstance(saved, dict) or saved.get(k) != identity[k])

@@ -13,6 +13,8 @@ identical result (``checkpoint``); see :func:`minimize`.
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 import time
 from pathlib import Path
@@ -20,6 +22,7 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
+from ..config import args
 from ..errors import config_error
 from .algorithm import _Evaluator, _Space, _new_points
 from .checkpoint import _identity, _resume, _save_checkpoint
@@ -108,6 +111,7 @@ def minimize(
     length, with every variable's range scaled to 1).
     """
     pop_size, n_gen, opts, stop_hv = _settings(problem, algorithm, pop_size, n_gen, options, hv_ref, stop_hv)
+    check_budget(pop_size, n_gen, seed)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     space = _Space(problem)
     given = _given_points(problem, space, initial)
@@ -136,6 +140,25 @@ def minimize(
     )
 
 
+#: The largest population and generation count :func:`minimize` takes, and the most designs
+#: (population × generations) one optimisation evaluates.
+MAX_POP_SIZE, MAX_GENERATIONS, MAX_EVALUATIONS = 100_000, 1_000_000, 10_000_000
+
+
+def check_budget(pop_size, n_gen, seed=None, algorithm=None) -> None:
+    """The budget (``pop_size`` ≥ 2, ``n_gen`` ≥ 1, None: the algorithm's default), a ``seed``
+    (an int ≥ 0, None or a numpy Generator) and the ``algorithm`` name, checked before any work
+    (:func:`vtb.optimize` calls it first)."""
+    args.whole("pop_size", pop_size, 2, MAX_POP_SIZE, none=True)
+    args.whole("n_gen", n_gen, 1, MAX_GENERATIONS, none=True)
+    if pop_size is not None and n_gen is not None and pop_size * n_gen > MAX_EVALUATIONS:
+        raise config_error("n_gen", n_gen, f"pop_size × n_gen = {pop_size * n_gen} designs exceeds {MAX_EVALUATIONS}")
+    if not isinstance(seed, np.random.Generator):
+        args.whole("seed", seed, 0, none=True)
+    if algorithm is not None and algorithm not in ("nsga2", "gamultiobj"):
+        raise config_error("algorithm", algorithm, "must be \"nsga2\" or \"gamultiobj\"")
+
+
 def _settings(problem, algorithm: str, pop_size, n_gen, options: dict, hv_ref, stop_hv) -> tuple:
     """The checked budget, options (with the algorithm's defaults) and ``stop_hv`` of :func:`minimize`."""
     if not isinstance(problem, Problem):
@@ -148,19 +171,17 @@ def _settings(problem, algorithm: str, pop_size, n_gen, options: dict, hv_ref, s
         raise config_error("options", unknown, f"unknown for {algorithm}; known: {sorted(defaults)}")
     opts = {**defaults, **options}
     n_var = problem.n_var
+    check_budget(pop_size, n_gen)
     if pop_size is None:
         pop_size = 100 if algorithm == "nsga2" else (50 if n_var <= 5 else 200)
     if n_gen is None:
         n_gen = 200 if algorithm == "nsga2" else 200 * n_var + 1
-    if int(pop_size) < 2:
-        raise config_error("pop_size", pop_size, "must be >= 2")
-    if int(n_gen) < 1:
-        raise config_error("n_gen", n_gen, "must be >= 1")
     pop_size, n_gen = int(pop_size), int(n_gen)
     for name, value in opts.items():
         lo, hi, open_lo = _OPTION_RANGES[name]
-        if value is not None and not ((lo < value if open_lo else lo <= value) and value <= hi):
-            raise config_error(name, value, f"must be in {'(' if open_lo else '['}{lo}, {hi}]")
+        if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value)
+                                  or not ((lo < value if open_lo else lo <= value) and value <= hi)):
+            raise config_error(name, value, f"must be a number in {'(' if open_lo else '['}{lo}, {hi}]")
     if hv_ref is not None and problem.n_obj != 2:
         raise config_error("hv_ref", hv_ref, "the recorded hypervolume needs 2 objectives")
     if stop_hv is not None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+import warnings
 from dataclasses import dataclass
 from typing import Callable, Optional, Sequence, Union
 
@@ -14,7 +15,7 @@ from .. import _core
 from ..analysis.comfort import iso2631, sperling
 from ..analysis.spectra import psd, third_octave, welch_third_octave
 from ..config import gateway
-from ..config.fields import Config
+from ..config.fields import Config, structure_json
 from ..config.prepare import prepare
 from ..config.resolution import warn_beyond
 from ..errors import VtbError, config_error
@@ -294,7 +295,7 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
         progress = False
     if isinstance(config, Config):
         check_build(config)  # a build beyond the budget is refused before the profile is sampled
-    text, profile = prepare(config)
+    text, profile = prepare(config, full=True)
     red = _reduction(config, building, text, profile.core_args())
     bar = None
 
@@ -337,6 +338,38 @@ DEFAULT_LANES = _core.DEFAULT_LANES
 SYNTHESIS_LANES = _core.SYNTHESIS_LANES
 
 
+def _prepare_all(configs, on_error: str, results: list) -> tuple:
+    """Every configuration of a batch prepared (checked; one sample's runs share its profile):
+    the core JSONs, each run's profile index, the profiles and the indices into ``configs`` of
+    the runs; a refused one is kept in ``results`` (``on_error="return"``). A warning's cause
+    is said once per batch, not once per run."""
+    jsons, profile_index, profiles, keys = [], [], [], {}
+    order = []
+    said: dict = {}
+    for i, cfg in enumerate(configs):
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                text, profile = prepare(cfg)
+        except VtbError as e:
+            if on_error == "raise":
+                raise
+            results[i] = e
+            continue
+        finally:
+            for w in caught:
+                said.setdefault((str(w.message), w.category), w)
+        if id(profile) not in keys:  # (held in keys: an id is not reused while the batch runs)
+            keys[id(profile)] = (len(profiles), profile)
+            profiles.append(profile.core_args())
+        profile_index.append(keys[id(profile)][0])
+        jsons.append(text)
+        order.append(i)
+    for w in said.values():
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return jsons, profile_index, profiles, order
+
+
 def simulate_batch(
     configs: Sequence[Config],
     threads: Optional[int] = None,
@@ -372,23 +405,8 @@ def simulate_batch(
         raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
     if lanes is not None and (not isinstance(lanes, int) or isinstance(lanes, bool) or lanes not in (1, 2, 4, 8)):
         raise config_error("lanes", lanes, "must be 1, 2, 4 or 8")
-    jsons, profile_index, profiles, keys = [], [], [], {}
     results: list = [None] * len(configs)
-    order = []
-    for i, cfg in enumerate(configs):
-        try:
-            text, profile = prepare(cfg)  # every configuration checked; one sample's runs share its profile
-        except VtbError as e:
-            if on_error == "raise":
-                raise
-            results[i] = e
-            continue
-        if id(profile) not in keys:  # (held in keys: an id is not reused while the batch runs)
-            keys[id(profile)] = (len(profiles), profile)
-            profiles.append(profile.core_args())
-        profile_index.append(keys[id(profile)][0])
-        jsons.append(text)
-        order.append(i)
+    jsons, profile_index, profiles, order = _prepare_all(configs, on_error, results)
     bar, callback = None, None
     if progress is True:
         from tqdm.auto import tqdm
@@ -460,8 +478,9 @@ def with_changes(config: Config, **changes) -> Config:
 def assembled_matrices(config: Config) -> dict:
     """The assembled structure matrices of a configuration as dense numpy arrays:
     ``{"m", "k", "c"}`` (kg, N/m, N·s/m in generalised coordinates) and ``"layers"``, a list
-    of (name, first DOF, number of DOFs)."""
-    out = _core.matrices(config.to_core_json())
+    of (name, first DOF, number of DOFs). Only the structure (and its dampers) is validated:
+    the loads, speed, solver and outputs play no part (:func:`vtb.config.fields.structure_json`)."""
+    out = _core.matrices(structure_json(config))
     n = out["n"]
     dense = {}
     for name in ("m", "k", "c"):

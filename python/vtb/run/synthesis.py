@@ -49,6 +49,7 @@ from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checke
                               shape_matrix, sliced_eigsh, spd_solver, structure_estimate)
 from ..config.fields import Config, structure_json
 from ..errors import SolverError, config_error
+from ..optim.checkpoint import clean_stale_temps
 
 #: Version of the reduction's algorithm and file layout: part of every cache key.
 FORMAT = 2
@@ -288,7 +289,9 @@ def _path(key: str) -> Path:
 
 def _save(red: Reduction, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    # A write a SIGKILL cut short leaves its temporary file: the next save clears those of dead writers.
+    clean_stale_temps(path.parent, ".reduction.")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".reduction.{os.getpid()}.", suffix=".tmp")
     os.close(fd)
     try:
         with open(tmp, "wb") as f:

@@ -9,22 +9,23 @@ import json
 from pathlib import Path
 from typing import Sequence
 
-from ..errors import ConfigError, VtbError, config_error
+from ..errors import ConfigError, MissingExtraError, VtbError, config_error
 from .indices import metric_unit
 
 
-def _pandas():
+def require_pandas():
+    """pandas, or a :class:`~vtb.errors.MissingExtraError` naming the extra ``vtb[io]``."""
     try:
         import pandas as pd
     except ImportError:
-        raise VtbError("tables need pandas: pip install 'vtb[io]'") from None
+        raise MissingExtraError("tables need pandas: pip install 'vtb[io]'", "io") from None
     return pd
 
 
 def frame(columns, units: dict | None = None):
     """A :class:`pandas.DataFrame` of ``columns`` (a dict of equal-length columns or a list of
     row dicts) with ``attrs["units"]`` = ``units``."""
-    df = _pandas().DataFrame(columns)
+    df = require_pandas().DataFrame(columns)
     df.attrs["units"] = dict(units or {})
     return df
 
@@ -44,7 +45,7 @@ def to_parquet(data, path) -> None:
     for ratios and counts, text and flag columns left out) is stored as JSON in the file's key–value
     metadata under ``vtb.units``. A named index (e.g. ``t`` of the histories) is written as a
     column and restored. :func:`read_parquet` reads values and units back exactly."""
-    pd = _pandas()
+    pd = require_pandas()
     if isinstance(data, (list, tuple)):
         df = metrics_table(data)
     elif isinstance(data, pd.DataFrame):
@@ -53,7 +54,7 @@ def to_parquet(data, path) -> None:
         df = data.to_pandas()
     else:
         raise config_error("data", type(data).__name__, "expected a pandas DataFrame, a batch (list of results or metrics dicts) or a vtb result with to_pandas()")
-    pa, pq = _pyarrow()
+    pa, pq = require_pyarrow()
     path = Path(path)
     if path.is_dir():
         raise config_error("path", str(path), "is a directory, not a file")
@@ -63,19 +64,20 @@ def to_parquet(data, path) -> None:
     pq.write_table(table.replace_schema_metadata(meta), str(path))
 
 
-def _pyarrow():
+def require_pyarrow():
+    """pyarrow, or a :class:`~vtb.errors.MissingExtraError` naming the extra ``vtb[io]``."""
     try:
         import pyarrow as pa
         import pyarrow.parquet as pq
     except ImportError:
-        raise VtbError("Parquet export needs pyarrow: pip install 'vtb[io]'") from None
+        raise MissingExtraError("Parquet export needs pyarrow: pip install 'vtb[io]'", "io") from None
     return pa, pq
 
 
 def read_parquet(path):
     """A DataFrame written by :func:`to_parquet` (or any ``.to_parquet`` of a vtb result),
     with its units back in ``attrs["units"]`` (``{}`` for a file without them)."""
-    _, pq = _pyarrow()
+    _, pq = require_pyarrow()
     table = pq.read_table(str(path))
     df = table.to_pandas()
     raw = (table.schema.metadata or {}).get(b"vtb.units")

@@ -28,26 +28,29 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import journal as jr
+from ..config import args
 from ..config.fields import Config
 from ..config.presets import tids_around
-from ..errors import VtbError, config_error
+from ..errors import VtbError, config_error, output_error, writing
 from ..run.indices import index_names
 from ..run.scaleout import run_cases
-from ..run.tables import frame, to_parquet, units_of
+from ..run.tables import frame, require_pandas, require_pyarrow, to_parquet, units_of
 
 #: Short names of fields: the dampers' inertance, stiffness and damping as the article names them.
 ALIASES = {
     "b_t": "tids.inertance", "k_t": "tids.stiffness", "c_t": "tids.damping",
     "tids.b_t": "tids.inertance", "tids.k_t": "tids.stiffness", "tids.c_t": "tids.damping",
 }
+#: The most cases one study runs (a grid's product, or the cases given); checked before any run.
+MAX_CASES = 1_000_000
 _PART = re.compile(r"\.?([A-Za-z_]\w*)|\[(\d+)\]")
 
 
 def _parts(path: str) -> list:
     """``"a.b[0].c"`` → ``["a", "b", 0, "c"]``; a malformed path raises ConfigError naming it."""
-    real = ALIASES.get(path, path)
-    if not isinstance(path, str) or not real:
+    if not isinstance(path, str) or not path.strip():
         raise config_error("study variable", path, "must be a dotted field path such as 'speed' or 'tids.stiffness'")
+    real = ALIASES.get(path, path)
     parts, at = [], 0
     while at < len(real):
         m = _PART.match(real, at)
@@ -193,15 +196,17 @@ def result_of(rows: list, config: Config, layout: jr.Layout, cls=StudyResult, jo
 def read_journal(path: Union[str, Path], field: str = "path", layout: Optional[jr.Layout] = None, result_class=StudyResult) -> StudyResult:
     """A study journal as a result, without running anything: the configuration of its stamp,
     the variables and indices of its header (or ``layout``), one row per key (the last
-    successful one), the reference case as case 0 and the others numbered in their order in the
-    file. A malformed journal raises a :class:`ConfigError` naming ``field`` and the line."""
-    path = Path(path)
+    successful one), the reference case as case 0 and the others numbered in the order of their
+    variables' values (the first variable slowest: a grid's own order for ascending values) —
+    not in the order they finished, so the same study run twice, resumed or on Dask reads back
+    equal. A malformed journal raises a :class:`ConfigError` naming ``field`` and the line."""
+    path = args.path(field, path)
     if not path.is_file():
         raise config_error(field, str(path), "no such study journal")
     config, layout, rows = jr.parse(path, field, layout)
     if config is None:
         raise config_error(field, str(path), "is an empty file, not a study journal")
-    ordered = sorted(rows.items(), key=lambda kv: kv[0] is not None)  # the reference first (stable)
+    ordered = sorted(rows.items(), key=lambda kv: (kv[0] is not None, kv[0] or ()))  # the reference first
     start = 0 if ordered and ordered[0][0] is None else 1
     return result_of([dict(r, case=start + i) for i, (_, r) in enumerate(ordered)], config, layout, result_class, journal=path)
 
@@ -225,31 +230,49 @@ def plan(config: Config, grid: Optional[Mapping] = None, *, cases: Optional[Sequ
     """The layout, the cases (dicts: ``case`` and each variable; the reference case 0 with NaN
     variables first, if any) and the configuration of each, checked before any run: a bad path,
     value or index raises :class:`ConfigError` naming it, and the first case is validated."""
+    if not isinstance(config, Config):
+        raise config_error("config", type(config).__name__, "expected a vtb.Config")
     if (grid is None) == (cases is None):
         raise config_error("grid", grid, "give either a grid {path: values} or cases [{path: value}, ...]")
+    reference = args.mapping("reference", reference, none=True)
+    if reference is not None:
+        for p, v in reference.items():
+            get_field(with_tids(config, p), p)  # the path exists
+            if isinstance(v, numbers.Real) and not isinstance(v, bool) and not math.isfinite(v):
+                raise config_error(f"reference[{p!r}]", v, "must be a finite number (or None, or a field's own value)")
     if grid is not None:
         if not isinstance(grid, Mapping) or not grid:
             raise config_error("grid", grid, "must be a non-empty mapping {field path: [values]}")
+        args.mapping("grid", grid)
         variables = tuple(grid)
+        size = math.prod(len(v) if isinstance(v, (Sequence, np.ndarray)) and not isinstance(v, (str, bytes)) else 1 for v in grid.values())
+        if size > MAX_CASES:
+            raise config_error("grid", f"{size} cases", f"at most {MAX_CASES} cases in one study (split it, or give cases=[...])")
         points = list(itertools.product(*(_values(p, grid[p]) for p in variables)))
     else:
-        if not cases or not all(isinstance(c, Mapping) for c in cases):
+        if isinstance(cases, (str, bytes, Mapping)) or not isinstance(cases, Sequence) or not cases or not all(isinstance(c, Mapping) for c in cases):
             raise config_error("cases", cases, "must be a non-empty list of {field path: value}")
+        if len(cases) > MAX_CASES:
+            raise config_error("cases", f"{len(cases)} cases", f"at most {MAX_CASES} cases in one study")
+        for i, c in enumerate(cases):
+            args.mapping(f"cases[{i}]", c)
         variables = tuple(cases[0])
         for i, c in enumerate(cases):
             if tuple(c) != variables:
                 raise config_error(f"cases[{i}]", sorted(c), f"every case sets the same fields ({', '.join(variables)})")
         points = [tuple(_values(p, [c[p]])[0] for p in variables) for c in cases]
     for p in variables:
-        get_field(with_tids(config, p), p)  # the path exists
+        old = get_field(with_tids(config, p), p)  # the path exists
+        if old is not None and (isinstance(old, bool) or not isinstance(old, (int, float))):
+            raise config_error(p, type(old).__name__, "is not a number field: a study varies numbers (e.g. 'speed', 'tids.stiffness')")
     names = index_names(config)
     if indices is None:
         indices = tuple(names)
     else:
-        if isinstance(indices, str) or not indices:
+        if isinstance(indices, str) or not isinstance(indices, (Sequence, np.ndarray)) or not len(indices):
             raise config_error("indices", indices, "must be a non-empty list of index names")
         for m in indices:
-            if m not in names:
+            if not isinstance(m, str) or m not in names:
                 raise config_error("indices", m, f"not an index of this configuration (known: {', '.join(names)})")
         indices = tuple(indices)
     layout = jr.Layout(variables, indices)
@@ -267,6 +290,21 @@ def with_tids(config: Config, path: str) -> Config:
         cfg.tids = tids_around(cfg)
         return cfg
     return config
+
+
+def _check_writable(out: Path) -> None:
+    """The folder of ``out`` (or its nearest existing ancestor) is a writable folder, checked
+    before any run: an :class:`~vtb.errors.OutputError` naming ``out`` otherwise."""
+    import errno
+    import os
+
+    at = out.parent
+    while not at.exists() and at != at.parent:
+        at = at.parent
+    if not at.is_dir():
+        raise output_error("out", out, NotADirectoryError(errno.ENOTDIR, f"{at} is a file, not a folder"))
+    if not os.access(at, os.W_OK | os.X_OK):
+        raise output_error("out", out, PermissionError(errno.EACCES, "permission denied"))
 
 
 def study(
@@ -308,15 +346,30 @@ def study(
     another study's journal is refused, as is one in use by a running study (a lock the kernel
     drops when its holder dies).
     """
+    out = args.path("out", out, none=True)
+    threads = args.whole("threads", threads, 1, none=True)
+    chunk = args.whole("chunk", chunk, 1, none=True)
+    if not (isinstance(progress, bool) or callable(progress)):
+        raise config_error("progress", progress, "must be True, False or a callable f(done, total)")
+    if executor is not None and not isinstance(executor, Executor):
+        raise config_error("executor", type(executor).__name__, "must be a concurrent.futures.Executor (or a Dask client's)")
+    if not isinstance(desc, str):
+        raise config_error("desc", desc, "must be a string")
+    if out is not None:
+        _check_writable(out)
+    if out is not None and out.suffix == ".parquet":
+        require_pandas(), require_pyarrow()  # the table written at the end: its extra is named before any run
     layout, todo_all, configs = plan(config, grid, cases=cases, reference=reference, indices=indices)
     config_of = {c["case"]: cfg for c, cfg in zip(todo_all, configs)}
     journal = None
     if out is not None:
-        out = Path(out)
         journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
-        journal.parent.mkdir(parents=True, exist_ok=True)
+        with writing("out", journal.parent):
+            journal.parent.mkdir(parents=True, exist_ok=True)
     with jr.lock(journal) if journal is not None else contextlib.nullcontext():
-        rows, todo = jr.reuse(jr.open_rows(journal, config, layout) if journal is not None else {}, todo_all, layout)
+        with writing("out", journal):
+            known = jr.open_rows(journal, config, layout) if journal is not None else {}
+        rows, todo = jr.reuse(known, todo_all, layout)
         total, done = len(todo_all), len(rows)
         bar, report = None, (progress if callable(progress) else None)
         if progress is True:
@@ -329,7 +382,8 @@ def study(
             new = rows_of([todo[i]], [r], layout)
             rows.extend(new)
             if journal is not None:
-                jr.append(journal, new, layout)
+                with writing("out", journal):
+                    jr.append(journal, new, layout)
             done += 1
             if bar is not None:
                 bar.update(1)

@@ -1,7 +1,9 @@
 """Study journals: CSV files a study appends each finished case to, so that it resumes.
 
-A journal's line 1 is its stamp, ``# vtb sweep journal {"config": {...}, "format": 1}`` (the
-studied configuration as JSON), line 2 the CSV header — the study's variables (the keys of a
+A journal's line 1 is its stamp, ``# vtb <kind> journal {"config": {...}, "format": 1, "vtb":
+"<version>"}`` (what study wrote it — ``sweep``, ``study``, ``robust sweep`` —, the studied
+configuration as JSON and the vtb version that wrote it; a journal of another version is
+refused rather than mixed), line 2 the CSV header — the study's variables (the keys of a
 row), its indices and ``error`` —, then one row per finished run. Rows are keyed by their
 variables' values (all ``nan``: the study's reference case), not by a case number, so that a
 changed grid reuses every row it shares. Used by :func:`vtb.study` and :func:`vtb.sweep`.
@@ -16,16 +18,30 @@ import io
 import json
 import math
 import os
+import re
 import socket
 from pathlib import Path
 from typing import Optional
 
 from ..config.fields import Config
-from ..errors import ConfigError, config_error, stale_file_error
+from ..errors import ConfigError, config_error, stale_file_error, writing
 from ..optim.checkpoint import write_atomically
 
 FORMAT = 1
 _STAMP = "# vtb sweep journal "
+#: The stamp's opening for a journal of ``kind`` (``"sweep"``: :func:`vtb.sweep`'s; ``"study"``:
+#: any other :func:`vtb.study`'s; the robust study's ``"robust sweep"``).
+_OPENING = re.compile(r"# vtb ([a-z ]+) journal ")
+
+
+def stamp_opening(kind: str) -> str:
+    return f"# vtb {kind} journal "
+
+
+def _version() -> str:
+    from ..config.gateway import __version__
+
+    return __version__
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,16 +126,28 @@ def parse(path: Path, field: str, layout: Optional[Layout] = None):
     def bad(line: int, reason: str) -> ConfigError:
         return config_error(field, str(path), f"line {line}: {reason}")
 
-    if not lines[0].startswith(_STAMP):
+    opening = _OPENING.match(lines[0])
+    if opening is None:
         raise bad(1, f"not a vtb study journal (its first line must be the stamp {_STAMP.strip()!r} + JSON); choose another path")
     try:
-        stamp = json.loads(lines[0][len(_STAMP):])
-        fmt, config = stamp["format"], Config.from_dict(stamp["config"])
+        stamp = json.loads(lines[0][opening.end():])
+        fmt = stamp["format"]
+    except (ValueError, KeyError, TypeError) as e:
+        raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
+    if isinstance(fmt, int) and not isinstance(fmt, bool) and fmt > FORMAT:
+        raise bad(1, f"written by a newer vtb ({stamp.get('vtb', 'unknown version')}; journal format {fmt}), which this vtb "
+                     f"{_version()} (format {FORMAT}) cannot read: upgrade vtb")
+    if fmt != FORMAT:
+        raise bad(1, f"journal format {fmt!r}; this vtb reads format {FORMAT}")
+    try:
+        config = Config.from_dict(stamp["config"])
         keys = stamp.get("keys")
     except (ValueError, KeyError, TypeError) as e:  # ConfigError is a ValueError
         raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
-    if fmt != FORMAT:
-        raise bad(1, f"journal format {fmt!r}; this vtb reads format {FORMAT}")
+    written_by = stamp.get("vtb")
+    if written_by is not None and written_by != _version():
+        raise stale_file_error(field, path, f"line 1: written by vtb {written_by}; this vtb {_version()} may give other results, "
+                                            "and a journal must not mix the two: choose another path (or move the file aside)")
     header = next(csv.reader(lines[1:2]), None)
     if layout is None:
         n = keys if isinstance(keys, int) else 3  # journals of vtb.sweep carry no key count: b_t, k_t, c_t
@@ -148,22 +176,24 @@ def parse(path: Path, field: str, layout: Optional[Layout] = None):
 
 
 @contextlib.contextmanager
-def lock(journal: Path):
+def lock(journal: Path, field: str = "out", holder_kind: str = "another sweep or study"):
     """Holds ``<journal>.lock`` for a whole study. The lock is an exclusive ``fcntl.flock`` on
     that file, which the kernel releases when its process dies: the file a killed study leaves
     behind is then free again, so stale locks need no clean-up. The holder writes its pid and
-    host into the file for the message of a study refused meanwhile."""
+    host into the file for the message of a study refused meanwhile. ``field`` names the
+    argument of a refusal, ``holder_kind`` what holds the lock."""
     import fcntl  # POSIX only
 
     path = journal.with_name(journal.name + ".lock")
     while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        with writing(field, path):
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 200, 0).decode(errors="replace").strip()
             os.close(fd)
-            raise config_error("out", str(journal), f"is in use by another sweep ({holder or 'pid not yet written'}; lock file {path})") from None
+            raise config_error(field, str(journal), f"is in use by {holder_kind} ({holder or 'pid not yet written'}; lock file {path})") from None
         # the holder may have removed the file between our open and our lock: lock the new one
         try:
             if os.stat(path).st_ino == os.fstat(fd).st_ino:
@@ -180,9 +210,11 @@ def lock(journal: Path):
         os.close(fd)
 
 
-def open_rows(journal: Path, config: Config, layout: Layout) -> dict:
-    """The rows of the journal of ``config`` by key, creating the journal if absent or empty;
-    refuses one of another configuration or other columns. Call it with the lock held."""
+def open_rows(journal: Path, config: Config, layout: Layout, kind: Optional[str] = None) -> dict:
+    """The rows of the journal of ``config`` by key, creating the journal if absent or empty
+    (stamped ``# vtb <kind> journal``: ``kind`` default "sweep" for the dampers' b_t, k_t, c_t,
+    else "study", and the vtb version); refuses one of another configuration or other
+    columns, or written by another vtb version. Call it with the lock held."""
     if journal.exists():
         _drop_partial_line(journal)
         stamped, _, rows = parse(journal, "out", layout)
@@ -190,10 +222,11 @@ def open_rows(journal: Path, config: Config, layout: Layout) -> dict:
         stamped, rows = None, {}
     stamp = config_stamp(config)
     if stamped is None:
-        head = {"format": FORMAT, "config": json.loads(stamp)}
-        if layout.keys != ("b_t", "k_t", "c_t"):
+        head = {"format": FORMAT, "config": json.loads(stamp), "vtb": _version()}
+        sweep = layout.keys == ("b_t", "k_t", "c_t")
+        if not sweep:
             head["keys"] = len(layout.keys)
-        first = _STAMP + json.dumps(head, sort_keys=True) + "\n"
+        first = stamp_opening(kind or ("sweep" if sweep else "study")) + json.dumps(head, sort_keys=True) + "\n"
         write_atomically(journal, lambda f: f.write((first + csv_text([], layout.columns, header=True)).encode()))
         return {}
     if config_stamp(stamped) != stamp:

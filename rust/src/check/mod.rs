@@ -30,7 +30,10 @@ pub fn validate(cfg: &Config, profile: &Profile) -> Result<()> {
     run::profile(profile)?;
     run::treads(cfg, profile)?;
     dampers::groups(cfg, length)?;
-    budget::check_model(cfg)
+    budget::check_model(cfg)?;
+    // The least any run records (one job, the indices' histories): a run too long for the
+    // budget is refused here, before an irregularity profile is drawn for it.
+    budget::check_histories(cfg, crate::outputs::Record::Metrics, 1)
 }
 
 /// The model of a configuration validated against `profile`.

@@ -271,6 +271,14 @@ pub const RANGES: &[Range] = &[
         get: |c| dampers(c, |t| t.damping),
     },
     Range {
+        field: "forces[*].magnitude",
+        min: 1e3,
+        max: 5e6,
+        unit: "N",
+        covers: "a wheel load to a heavy axle group",
+        get: |c| c.forces.iter().map(|f| f.magnitude).collect(),
+    },
+    Range {
         field: "solver.dt",
         min: 1e-7,
         max: 1e-2,
@@ -301,6 +309,7 @@ fn hint(r: &Range, v: f64) -> String {
         "m²" => &[(1e-4, "cm²"), (1e-6, "mm²")],
         "m⁴" => &[(1e-8, "cm⁴")],
         "–" => &[(1e-2, "%")],
+        "N" => &[(1e3, "kN")],
         "N·s/m" => &[(1e3, "kN·s/m")],
         "N·s/m²" => &[(1e3, "kN·s/m²")],
         _ => &[],
@@ -396,6 +405,24 @@ mod tests {
             "{e}"
         );
         c.accept_implausible = vec!["speed".into()];
+        check(&c).unwrap();
+    }
+
+    #[test]
+    fn a_force_in_kn_is_named_with_its_likely_unit() {
+        let mut c = paper();
+        c.vehicles.clear();
+        c.forces = vec![crate::config::MovingForceConfig {
+            magnitude: 170.0,
+            x0: 0.0,
+            layer: None,
+        }];
+        let e = check(&c).unwrap_err().to_string();
+        assert!(
+            e.contains("`forces[0].magnitude`") && e.contains("in kN, that is 170000.0000 N"),
+            "{e}"
+        );
+        c.forces[0].magnitude = 170e3;
         check(&c).unwrap();
     }
 }

@@ -129,14 +129,30 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
     for (i, f) in cfg.forces.iter().enumerate() {
         let p = format!("forces[{i}]");
         f.validate(&p)?;
-        if let Some(layer) = &f.layer {
-            if cfg.layer_index(layer).is_none() {
-                return Err(VtbError::config(
+        let li = match &f.layer {
+            Some(layer) => cfg.layer_index(layer).ok_or_else(|| {
+                VtbError::config(
                     format!("{p}.layer"),
                     format!("{layer:?}"),
                     "no layer of that name",
-                ));
-            }
+                )
+            })?,
+            None => 0,
+        };
+        // A force that never reaches its layer loads nothing: the run would answer for an
+        // unloaded structure.
+        let (a, b) = cfg.extent(li);
+        if f.x0 > b + 1e-9 || f.x0 + travel < a - 1e-9 {
+            return Err(VtbError::config(
+                format!("{p}.x0"),
+                f.x0,
+                format!(
+                    "the force travels [{:.4}, {:.4}] m and never reaches its layer [{a}, {b}] m: it \
+                     would load nothing",
+                    f.x0,
+                    f.x0 + travel
+                ),
+            ));
         }
     }
     if cfg.vehicles.is_empty() && cfg.forces.is_empty() {

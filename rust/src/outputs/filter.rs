@@ -81,16 +81,27 @@ fn pass(sections: &[Section], x: &mut [f64]) {
 /// below the Nyquist frequency 1/(2dt). `field` names it in the error.
 pub fn check(field: &str, fc: f64, dt: f64) -> Result<()> {
     let nyquist = 0.5 / dt;
-    if fc.is_finite() && fc > 0.0 && fc < nyquist {
+    // Below this fraction of the sampling rate the sections' poles sit within rounding of
+    // z = 1 and the filtered record is no longer finite.
+    let lowest = MIN_CUTOFF_RATIO / dt;
+    if fc.is_finite() && fc >= lowest && fc < nyquist {
         Ok(())
     } else {
         Err(VtbError::config(
             field,
             format!("{fc:?}"),
-            format!("must lie in (0, {nyquist:?}) Hz, below the Nyquist frequency 1/(2·dt)"),
+            format!(
+                "must lie in [{lowest:?}, {nyquist:?}) Hz: below the Nyquist frequency \
+                 1/(2·dt) and at least {MIN_CUTOFF_RATIO:e}/dt, the lowest cut-off the \
+                 filter resolves in double precision"
+            ),
         ))
     }
 }
+
+/// The lowest cut-off (as a fraction of the sampling rate 1/dt) the filter takes: it breaks
+/// down near 5e-10 and is exact to rounding at 5e-9.
+pub const MIN_CUTOFF_RATIO: f64 = 1e-6;
 
 /// `x` low-passed at `fc` (Hz), zero phase, sampled every `dt` (s); `fc` must lie below the
 /// Nyquist frequency 1/(2dt) (the configuration checks it). Records shorter than the padding

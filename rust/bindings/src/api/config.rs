@@ -56,9 +56,9 @@ pub(crate) fn preset(py: Python<'_>, name: &str) -> PyResult<String> {
 }
 
 /// Validates a JSON configuration against an irregularity profile; raises on the first
-/// problem.
+/// problem. `full`: also refuses a run whose full histories (`simulate`) exceed the budget.
 #[pyfunction]
-#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, treads=Vec::new()))]
+#[pyo3(signature = (config_json, profile_x0=0.0, profile_dx=1.0, profile=None, treads=Vec::new(), full=false))]
 pub(crate) fn validate(
     py: Python<'_>,
     config_json: &str,
@@ -66,10 +66,16 @@ pub(crate) fn validate(
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
     treads: Vec<PyReadonlyArray1<'_, f64>>,
+    full: bool,
 ) -> PyResult<()> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile, treads)?;
-    vtb::check::validate(&cfg, &p).map_err(|e| to_py_err(py, e))
+    vtb::check::validate(&cfg, &p).map_err(|e| to_py_err(py, e))?;
+    if full {
+        vtb::check::budget::check_histories(&cfg, vtb::outputs::Record::Full, 1)
+            .map_err(|e| to_py_err(py, e))?;
+    }
+    Ok(())
 }
 
 /// Parses a JSON configuration against the schema (types, ranges, unknown and missing
