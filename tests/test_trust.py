@@ -147,8 +147,8 @@ def test_a_full_disk_during_a_study_is_an_output_error_naming_the_journal(tmp_pa
 # caps before work ---------------------------------------------------------------------------
 
 def test_a_run_too_long_for_the_budget_is_refused_before_its_profile_is_drawn():
-    c = vtb.track_zones(vtb.paper_config(model="fast"))
-    c.solver.t_end = 1000.0
+    c = vtb.track_zones(vtb.paper_config(model="converged"))
+    c.solver.t_end = 400.0
     refused(lambda: vtb.simulate(c, progress=False), "solver.t_end", match="GB")
     c.solver.t_end = 10_000.0
     refused(lambda: vtb.simulate(c, progress=False), "solver.dt", match="steps exceeds")
