@@ -16,7 +16,7 @@ import pytest
 import vtb
 from vtb.run import synthesis
 
-PYTHON = str(Path(__file__).resolve().parents[1] / "python")
+PYTHON = str(Path(vtb.__file__).resolve().parents[1])  # the vtb under test (installed or in place)
 
 #: The structure of every build here: the fast preset on one 32 m span at a 100 Hz cut-off.
 CASE = textwrap.dedent("""

@@ -147,9 +147,13 @@ def test_a_full_disk_during_a_study_is_an_output_error_naming_the_journal(tmp_pa
 # caps before work ---------------------------------------------------------------------------
 
 def test_a_run_too_long_for_the_budget_is_refused_before_its_profile_is_drawn():
+    """On the fast model the reduction's build is weighed first (it would be the costliest
+    part); on the finite elements a run of more steps than the limit is refused before its
+    1.9 km profile is drawn."""
+    c = vtb.track_zones(vtb.paper_config(model="fast"))
+    c.solver.t_end = 1000.0
+    refused(lambda: vtb.simulate(c, progress=False), "solver.memory_budget", match="GB")
     c = vtb.track_zones(vtb.paper_config(model="converged"))
-    c.solver.t_end = 400.0
-    refused(lambda: vtb.simulate(c, progress=False), "solver.t_end", match="GB")
     c.solver.t_end = 10_000.0
     refused(lambda: vtb.simulate(c, progress=False), "solver.dt", match="steps exceeds")
 
@@ -316,7 +320,10 @@ def test_band_levels_on_the_hybrid_warn_once_per_cause_in_a_batch():
         warnings.simplefilter("always")
         vtb.simulate_batch(cfgs, progress=False)
     said = [str(w.message) for w in caught if issubclass(w.category, vtb.ResolutionWarning)]
-    assert len(said) == 1, said
+    # three runs differing only in their seed: each cause (the band levels, and the
+    # irregularity's band beyond the rail's) said once for the batch, not once per run or layer
+    assert said and len(said) == len(set(said)) <= 2, said
+    assert sum(m.startswith("output.band_levels") for m in said) == 1, said
 
 
 def test_what_the_long_fuzz_run_found_is_named():
