@@ -55,6 +55,7 @@ defects by position.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Callable, Optional, Sequence
@@ -164,12 +165,22 @@ DEFECT_DX = 5e-4
 FLAT_SHAPES = ("rounded", "new")
 
 
+@functools.lru_cache(maxsize=4)
+def _gauss_legendre(n: int) -> tuple:
+    """Gauss–Legendre nodes and weights on [-1, 1], made once: numpy finds them by a dense
+    eigenproblem (tens of ms), which would otherwise be paid at every run's band check."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.setflags(write=False)
+    w.setflags(write=False)
+    return x, w
+
+
 def band_variance(kind: str, wavelength_min: float, wavelength_max: float, **params) -> float:
     """∫ S(f) df over the band (m²), by Gauss–Legendre in log f (exact to round-off for the
     smooth power-law families)."""
     s = psd(kind, **params)
     lo, hi = math.log(1.0 / wavelength_max), math.log(1.0 / wavelength_min)
-    x, w = np.polynomial.legendre.leggauss(200)
+    x, w = _gauss_legendre(200)
     u = 0.5 * (hi - lo) * (x + 1.0) + lo
     f = np.exp(u)
     return float(np.sum(w * s(f) * f) * 0.5 * (hi - lo))
