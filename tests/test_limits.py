@@ -179,7 +179,7 @@ def test_cli_refuses_bad_files_and_folders_before_computing(tmp_path, capsys):
     capsys.readouterr()
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    _one_line_error(capsys, ["simulate", "--config", str(cfg), "--out", str(blocker / "sub")], "--out", "not writable")
+    _one_line_error(capsys, ["simulate", "--config", str(cfg), "--out", str(blocker / "sub")], "--out", "is a file, not a folder")
     _one_line_error(capsys, ["simulate", "--config", str(tmp_path / "none.toml")], "--config", "no such file")
     _one_line_error(capsys, ["simulate", "--config", str(tmp_path)], "--config", "directory")
     _one_line_error(capsys, ["optimize", "--config", str(cfg), "--out", str(tmp_path)], "--out", "directory")

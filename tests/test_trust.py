@@ -73,6 +73,20 @@ def test_a_force_that_never_reaches_the_structure_is_refused():
     refused(_simulate(far), "forces[0].x0", match="never reaches")
 
 
+def test_a_vehicle_that_never_reaches_the_structure_is_refused():
+    far = refused(_simulate(lambda c: setattr(c.vehicles[0], "x_front", 1e6)), "vehicles[0].x_front", match="never reach the rail")
+    assert "1000000" in str(far)
+
+    def behind(c):  # 60 m behind at 60 m/s for 0.2 s: 12 m of travel
+        c.vehicles[0].x_front, c.solver.t_end, c.solver.edge_step = -60.0, 0.2, True
+    refused(_simulate(behind), "vehicles[0].x_front", match="lengthen the run")
+
+    def last_car(c):  # a train of two whose second car stays behind
+        c.vehicles = vtb.train("crh3", cars=2, x_front=c.vehicles[0].x_front)
+        c.vehicles[1].x_front = -500.0
+    refused(_simulate(last_car), "vehicles[1].x_front", match="never reach")
+
+
 def test_a_band_limit_below_the_filters_precision_is_a_config_error():
     refused(_simulate(lambda c: setattr(c.output, "band_limit", 1e-9)), "output.band_limit", match="double precision")
 
@@ -344,3 +358,48 @@ def test_a_defect_seen_through_an_implausible_wheel_is_refused_at_once():
     envelope; the radius is held to the wheels' plausible range."""
     joint = vtb.Irregularity(kind="rail_joint", position=21.0, depth=1e-4, length=0.3, wheel_radius=1e300)
     refused(_simulate(lambda c: setattr(c, "irregularity", joint)), "irregularity.wheel_radius", match="plausible wheel radius")
+
+
+# folders of user paths ----------------------------------------------------------------------
+
+def test_make_folder_creates_only_the_last_folder(tmp_path):
+    from vtb.errors import make_folder
+
+    assert make_folder(tmp_path / "new", "out").is_dir()
+    assert make_folder(tmp_path / "new", "out").is_dir()  # an existing folder is fine
+    e = refused(lambda: make_folder(tmp_path / "typo" / "deeper", "out"), "out", match="parent folder", cls=OutputError)
+    assert e.path == str(tmp_path / "typo" / "deeper") and e.errno == errno.ENOENT and not (tmp_path / "typo").exists()
+    (tmp_path / "file").write_text("x")
+    e = refused(lambda: make_folder(tmp_path / "file" / "sub", "out"), "out", match="is a file", cls=OutputError)
+    assert e.errno == errno.ENOTDIR
+
+
+def _typo(tmp_path):
+    return tmp_path / "typo" / "results"
+
+
+def _bridge_check(tmp_path):
+    cfg = vtb.moving_load_config(20.0, 2500.0, 4.8, 3.5e10, 0.1, [vtb.MovingForce(1.0, 0.0)], 50.0, points=[10.0], modes=10, dt=1e-3)
+    settings = dict(span=20.0, bridge_type="prestressed_concrete", track="ballasted", line_speed=60.0, trains=["HSLM-A1"], dt=1e-3)
+    return vtb.bridge_check(cfg, settings, _typo(tmp_path), progress=False)
+
+
+@pytest.mark.parametrize("write, field", [
+    (lambda p: vtb.study(small_config(), {"speed": [60.0]}, out=_typo(p) / "s.csv", progress=False), "out"),
+    (lambda p: vtb.study(small_config(), {"speed": [60.0]}, out=_typo(p) / "s.parquet", progress=False), "out"),
+    (lambda p: vtb.optimize(small_config(), pop_size=4, n_gen=1, seed=1, progress=False, checkpoint=_typo(p) / "ck.npz"), "checkpoint"),
+    (_bridge_check, "out"),
+    (lambda p: vtb.speed_scan(small_config(), ["HSLM-A1"], [60.0], out=_typo(p), progress=False), "out"),
+])
+def test_a_mistyped_folder_tree_is_refused_before_any_run(tmp_path, write, field):
+    refused(lambda: write(tmp_path), field, match="parent folder", cls=OutputError)
+    assert not (tmp_path / "typo").exists()
+
+
+def test_vtb_simulate_refuses_a_mistyped_folder_tree_in_one_line(tmp_path, capsys):
+    from vtb import cli
+
+    assert cli.main(["simulate", "--config", _tiny_toml(tmp_path), "--out", str(_typo(tmp_path)), "--no-plot"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "parent folder" in err and "--out" in err and not (tmp_path / "typo").exists()
+    assert cli.main(["simulate", "--config", _tiny_toml(tmp_path), "--out", str(tmp_path / "results"), "--no-plot"]) == 0

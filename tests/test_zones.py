@@ -70,6 +70,7 @@ def test_wheels_off_the_structure_run_on_a_rigid_track():
     equilibrium on a rigid track: every wheel force is the static wheel load
     (M_c/4 + M_t/2 + M_w)·g / rails exactly, and the structure is not loaded."""
     cfg = _off_structure_case(t_end=0.2)
+    cfg.accept_implausible = ["vehicles[0].x_front"]  # a run that never reaches the structure, as meant
     r = vtb.simulate(cfg)
     v = cfg.vehicles[0]
     static = (v.m_c / 4 + v.m_t / 2 + v.m_w) * cfg.solver.gravity / v.rails

@@ -19,7 +19,7 @@ from .config.fields import Config
 from .config.gateway import __version__
 from .config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, example_config, example_text, examples, paper_config, tids_around
 from .config.resolution import resolved_band
-from .errors import StaleFileError, VtbError, config_error, writing
+from .errors import StaleFileError, VtbError, config_error, make_folder, writing
 from .studies.journal import lock
 from .run.indices import A_RM, A_SM, metric_unit, rate
 from .run.simulate import simulate
@@ -32,12 +32,12 @@ REPRODUCE_FILES = ("report.md",)
 
 
 def _writable_dir(path: Path, option: str) -> None:
-    """Creates ``path`` (a directory) if needed and proves it writable, or raises a
-    :class:`~vtb.errors.ConfigError` naming ``option``."""
+    """Creates ``path`` (a directory; only the last folder, :func:`vtb.errors.make_folder`) if
+    needed and proves it writable, or raises a :class:`~vtb.errors.VtbError` naming ``option``."""
     if path.exists() and not path.is_dir():
         raise config_error(option, str(path), "is a file, not a directory")
+    make_folder(path, option)
     try:
-        path.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=path):
             pass
     except OSError as e:

@@ -119,6 +119,38 @@ def writing(field: str, path):
     return guard()
 
 
+def check_folder(path, field: str):
+    """Whether the folder ``path`` (named by ``field``) can be used or created by vtb, without
+    creating it: an existing, writable folder, or one whose parent is an existing, writable
+    folder — vtb creates only the last folder of a path it writes to, never a tree of them
+    under a mistyped path. Returns ``path`` as a :class:`~pathlib.Path`; raises an
+    :class:`OutputError` naming ``field``, the path and the cause otherwise."""
+    import errno as _errno
+    import os as _os
+    from pathlib import Path
+
+    folder = Path(path) if str(path) else Path(".")
+    at = folder if folder.exists() else folder.parent
+    if not at.exists():
+        raise output_error(field, folder, FileNotFoundError(_errno.ENOENT, f"its parent folder {str(at)!r} does not exist (vtb creates only "
+                                                                            "the last folder of a path: check the path for a typo, or create the parent)"))
+    if not at.is_dir():
+        raise output_error(field, folder, NotADirectoryError(_errno.ENOTDIR, f"{str(at)!r} is a file, not a folder"))
+    if not _os.access(at, _os.W_OK | _os.X_OK):
+        raise output_error(field, folder, PermissionError(_errno.EACCES, f"{str(at)!r} is not writable"))
+    return folder
+
+
+def make_folder(path, field: str):
+    """The folder ``path`` (named by ``field``), created if absent when its parent exists
+    (:func:`check_folder`: only the last folder of a path is ever created). Every writer of a
+    user's path makes its folder with this. Returns it as a :class:`~pathlib.Path`."""
+    folder = check_folder(path, field)
+    with writing(field, folder):
+        folder.mkdir(exist_ok=True)
+    return folder
+
+
 class MissingExtraError(VtbError, ImportError):
     """An optional dependency a method needs is not installed; ``extra`` names the package
     extra that brings it (``pip install 'vtb[io]'``). Raised before any work is done."""

@@ -36,6 +36,13 @@ pub mod linalg;
 pub mod model;
 pub mod outputs;
 
+/// The results epoch: raised by every change that alters a run's results (a model, a
+/// solver, an index's definition), and only then. Study journals and optimiser checkpoints
+/// carry it, and a resume across two epochs is refused rather than mixing their rows; a
+/// change of the vtb version alone does not refuse one. `tests/test_results_epoch.py` holds
+/// a fingerprint of a few runs' indices that fails until the epoch is raised.
+pub const RESULTS_EPOCH: u32 = 1;
+
 pub use config::{Config, Profile};
 pub use engine::{
     BatchOptions, Control, Job, Sink, run_batch, run_batch_each, run_batch_with, simulate,

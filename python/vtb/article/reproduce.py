@@ -25,7 +25,7 @@ import numpy as np
 
 from ..analysis.spectra import third_octave
 from ..config.fields import Config
-from ..errors import ConvergenceError, config_error
+from ..errors import ConvergenceError, config_error, make_folder
 from ..run.indices import A_CM, A_RM, A_RRMS, A_RST, A_SM, D_CM, D_RM, D_SM, F_MAX, LOSS, rate
 from .tid_optimize import optimize
 from ..config.presets import ARTICLE_RAIL_ACC, PAPER_CALIBRATED_SCALE, paper_config, tids_around
@@ -143,8 +143,7 @@ def run(out, quick: bool = False, progress: bool = True, seed: int = 0, pop_size
     cap). ``optimiser``: see :func:`optimisations`. The sweep journal ``out/sweep.csv`` and the
     optimisers' checkpoints are resumed if present. ``executor``: the sweep's and the
     optimisations' runs as tasks on it (:mod:`vtb.run.scaleout`)."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_folder(out, "out")
     plan = dict(QUICK if quick else FULL)
     plan.update({k: v for k, v in (("pop_size", pop_size), ("n_gen", n_gen)) if v is not None})
     times = {}

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..config.fields import Config, TIDs
 from ..config.presets import tids_around
-from ..errors import VtbError, config_error
+from ..errors import VtbError, config_error, make_folder
 from ..run.indices import A_RM, ARTICLE_OBJECTIVES, CONSTRAINTS, METRICS, RAIL_RATE, REDUCED
 from ..run.scaleout import run_all, run_cases
 from ..run.tables import frame, to_parquet, units_of
@@ -372,7 +372,7 @@ def sweep_over(config: Config, b_t, k_t, c_t, *, samples, speeds, statistic_name
             cfg.tids = config.tids
             journal, known = None, {}
             if out_dir is not None:
-                out_dir.mkdir(parents=True, exist_ok=True)
+                make_folder(out_dir, "out")
                 journal = out_dir / f"v{v:g}_seed{s}.csv"
                 stack.enter_context(jr.lock(journal))
                 known = jr.open_rows(journal, cfg, LAYOUT, kind="robust sweep")

@@ -39,6 +39,7 @@ from .robust import DESIGN_SEED0, HELD_OUT_SEED0, DesignEvaluation, evaluate_des
 from ..run.scaleout import run_all
 from .reproduce import ARTICLE_CAR_ACC, ARTICLE_TABLE3_1
 from ..config.resolution import pinned_pinned_frequency
+from ..errors import make_folder
 from ..studies.journal import config_stamp
 from .tid_sweep import ARTICLE_BEST_RAIL_CUT, sweep
 from ..studies.journal import same_config
@@ -159,8 +160,7 @@ def run(out, quick: bool = False, progress: bool = True, executor=None) -> Path:
     """Runs the study and writes ``out/report.md`` with its figures (PNG and PDF) and CSV
     tables. Returns the report's path. ``executor``: every stage's runs as tasks on it (a
     process pool, or Dask's ``client.get_executor()``; :mod:`vtb.run.scaleout`)."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_folder(out, "out")
     plan = PLANS["quick" if quick else "full"]
     times = {}
     t_start = time.perf_counter()

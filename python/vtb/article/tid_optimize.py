@@ -24,7 +24,7 @@ from . import robust
 from ..config import args
 from ..config.fields import Config
 from ..optim.driver import check_budget
-from ..errors import config_error, stale_file_error
+from ..errors import check_folder, config_error, stale_file_error
 from ..run.indices import ARTICLE_OBJECTIVES, CONSTRAINTS, METRICS, RAIL_RATE
 from ..run.simulate import simulate
 from ..studies.journal import config_stamp
@@ -158,7 +158,9 @@ def optimize(
     if not isinstance(config, Config):
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
     args.whole("threads", threads, 1, none=True)
-    args.path("checkpoint", checkpoint, none=True)
+    checkpoint_path = args.path("checkpoint", checkpoint, none=True)
+    if checkpoint_path is not None:
+        check_folder(checkpoint_path.parent, "checkpoint")  # before any run
     if not (isinstance(progress, bool) or callable(progress)):
         raise config_error("progress", progress, "must be True, False or a callable")
     if variables is not None:

@@ -21,6 +21,7 @@ import numpy as np
 from . import robust
 from ..config.fields import Config
 from ..config.resolution import pinned_pinned_frequency
+from ..errors import make_folder
 from ..run.indices import A_RM, A_RRMS, A_RST, A_SM, METRICS
 from ..studies.grid import study
 from .tid_problem import REFERENCE, SweepResult, plan
@@ -151,6 +152,6 @@ def sweep_report(result: SweepResult, path=None, seconds: Optional[float] = None
     ]
     text = "\n".join(lines) + "\n"
     if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        make_folder(Path(path).parent, "path")
         Path(path).write_text(text)
     return text

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..config.fields import Config
 from ..config.presets import PAPER_CALIBRATED_SCALE, paper_config, tids_around
+from ..errors import make_folder
 from ..run.simulate import Result, simulate
 from ..machine import describe
 from ..run.indices import A_RM, D_RM, D_SM
@@ -369,7 +370,7 @@ def write_report(cases: list[Case], path, base: Optional[Config] = None, command
         lines.append("")
     lines += EXPLANATION
     text = "\n".join(lines) + "\n"
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    make_folder(Path(path).parent, "path")
     Path(path).write_text(text)
     return text
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..config.fields import Config
 from ..config.gateway import __version__
-from ..errors import config_error
+from ..errors import config_error, make_folder
 from .assess import Assessment, assess
 from .checks import n0_limits
 from .damping import BRIDGE_TYPE_TITLES
@@ -37,7 +37,7 @@ def bridge_check(config: Config, settings: Union[BridgeCheck, dict], out: Union[
     directory = Path(out)
     if directory.exists() and not directory.is_dir():
         raise config_error("out", str(directory), "is a file, not a directory")
-    directory.mkdir(parents=True, exist_ok=True)
+    make_folder(directory, "out")
     result = assess(config, check, out=directory, executor=executor, threads=threads, progress=progress)
     write(result, directory, figures=figures)
     return result

@@ -21,7 +21,7 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from ..config.fields import Config
-from ..errors import config_error
+from ..errors import config_error, make_folder
 from ..run.tables import frame, to_parquet
 from ..studies.grid import study
 from .load_trains import LoadTrain, apply_load_train, load_train
@@ -169,7 +169,7 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     acc, disp = deck_indices(base)
     directory = Path(out) if out is not None else None
     if directory is not None:
-        directory.mkdir(parents=True, exist_ok=True)
+        make_folder(directory, "out")
     cols = {k: [] for k in ("train", "bound", "speed", "acc", "disp", "error")}
     journals = {}
     for bound, factor in bounds.items():

@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import config_error, stale_file_error
+from ..errors import config_error, stale_file_error, writing
 from .problem import Generation
 
 _CHECKPOINT_FORMAT = "vtb.moga checkpoint 1"
@@ -112,7 +112,8 @@ def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, histor
         format=_CHECKPOINT_FORMAT, vtb=_version(), identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
         message=message, history=[asdict(h) for h in history],
     )
-    write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
+    with writing("checkpoint", path):
+        write_atomically(path, lambda f: np.savez(f, header=np.array(json.dumps(header)), **algo.state()))
 
 
 def saved_identity(path: Path):

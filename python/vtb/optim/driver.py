@@ -23,7 +23,7 @@ from typing import Callable, Optional, Union
 import numpy as np
 
 from ..config import args
-from ..errors import config_error
+from ..errors import config_error, make_folder
 from .algorithm import _Evaluator, _Space, _new_points
 from .checkpoint import _identity, _resume, _save_checkpoint
 from .gamultiobj import GAMULTIOBJ_DEFAULTS, _Gamultiobj
@@ -125,7 +125,7 @@ def minimize(
     if checkpoint is not None:
         if seed is None:
             raise config_error("seed", None, "a checkpointed run needs a seed (an int or a Generator) to be resumable")
-        checkpoint = Path(checkpoint)
+        checkpoint = make_folder(Path(checkpoint).parent, "checkpoint") / Path(checkpoint).name
         identity = _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, checkpoint_identity)
         if checkpoint.exists():
             history, message = _resume(checkpoint, identity, algo, rng, evaluate, n_gen)

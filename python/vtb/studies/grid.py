@@ -31,7 +31,7 @@ from . import journal as jr
 from ..config import args
 from ..config.fields import Config
 from ..config.presets import tids_around
-from ..errors import VtbError, config_error, output_error, writing
+from ..errors import VtbError, check_folder, config_error, make_folder, writing
 from ..run.indices import index_names
 from ..run.scaleout import run_cases
 from ..run.tables import frame, require_pandas, require_pyarrow, to_parquet, units_of
@@ -292,21 +292,6 @@ def with_tids(config: Config, path: str) -> Config:
     return config
 
 
-def _check_writable(out: Path) -> None:
-    """The folder of ``out`` (or its nearest existing ancestor) is a writable folder, checked
-    before any run: an :class:`~vtb.errors.OutputError` naming ``out`` otherwise."""
-    import errno
-    import os
-
-    at = out.parent
-    while not at.exists() and at != at.parent:
-        at = at.parent
-    if not at.is_dir():
-        raise output_error("out", out, NotADirectoryError(errno.ENOTDIR, f"{at} is a file, not a folder"))
-    if not os.access(at, os.W_OK | os.X_OK):
-        raise output_error("out", out, PermissionError(errno.EACCES, "permission denied"))
-
-
 def study(
     config: Config,
     grid: Optional[Mapping] = None,
@@ -356,7 +341,7 @@ def study(
     if not isinstance(desc, str):
         raise config_error("desc", desc, "must be a string")
     if out is not None:
-        _check_writable(out)
+        check_folder(out.parent, "out")
     if out is not None and out.suffix == ".parquet":
         require_pandas(), require_pyarrow()  # the table written at the end: its extra is named before any run
     layout, todo_all, configs = plan(config, grid, cases=cases, reference=reference, indices=indices)
@@ -364,8 +349,7 @@ def study(
     journal = None
     if out is not None:
         journal = out.with_name(out.name + ".csv") if out.suffix == ".parquet" else out
-        with writing("out", journal.parent):
-            journal.parent.mkdir(parents=True, exist_ok=True)
+        make_folder(journal.parent, "out")
     with jr.lock(journal) if journal is not None else contextlib.nullcontext():
         with writing("out", journal):
             known = jr.open_rows(journal, config, layout) if journal is not None else {}

@@ -26,7 +26,7 @@ from typing import Optional
 import numpy as np
 
 from ..config.fields import Config
-from ..errors import config_error, stale_file_error
+from ..errors import config_error, make_folder, stale_file_error
 from ..optim import Problem, minimize, saved_identity
 from ..optim import Result as OptimResult
 from ..run.indices import index_names
@@ -223,6 +223,7 @@ def solve(evaluator: DesignEvaluator, lower, upper, log_scale, *, algorithm: str
     problem = Problem(lower=lower, upper=upper, n_obj=evaluator.n_obj, n_constr=evaluator.n_constr, evaluate=evaluator,
                       log_scale=np.array(log_scale))
     if checkpoint is not None:
+        make_folder(Path(checkpoint).parent, "checkpoint")
         evaluator.designs.path = Path(str(checkpoint) + ".designs.jsonl")
     evaluator.designs.load(identity)
     res = minimize(problem, algorithm, pop_size=pop_size, n_gen=n_gen, seed=seed, progress=progress, hv_ref=hv_ref, initial=initial,

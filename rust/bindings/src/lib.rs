@@ -39,6 +39,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::config::plausible_ranges, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::check_plausible, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("RESULTS_EPOCH", vtb::RESULTS_EPOCH)?;
     m.add("DEFAULT_LANES", vtb::engine::DEFAULT_LANES)?;
     m.add("SYNTHESIS_LANES", vtb::engine::SYNTHESIS_LANES)?;
     m.add("MIN_BINS_PER_BAND", vtb::outputs::bands::MIN_BINS_PER_BAND)?;

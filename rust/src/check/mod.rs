@@ -120,12 +120,76 @@ mod tests {
         assert_eq!(refused_field(&cfg), None);
         cfg.solver.edge_ramp = 5.0; // a step and a hand-over at once: refused
         assert_eq!(refused_field(&cfg).as_deref(), Some("solver.edge_step"));
-        // Wheels that stay off the rail for the whole run need nothing.
-        cfg.solver.edge_step = false;
-        cfg.solver.edge_ramp = 0.0;
-        cfg.vehicles[0].wheels.x_front = -500.0;
-        cfg.solver.t_end = Some(0.1);
+    }
+
+    /// A vehicle none of whose wheels ever rolls onto the rail would load nothing: refused on
+    /// its `x_front` whether it stands beyond the structure, or behind it on a run too short
+    /// to arrive, and whatever the hand-over at the rail's ends.
+    #[test]
+    fn a_vehicle_that_never_reaches_the_rail_is_refused() {
+        let message = |cfg: &Config| match validate(cfg, &Profile::flat()) {
+            Err(VtbError::Config { field, reason, .. }) => (field, reason),
+            other => panic!("not refused: {other:?}"),
+        };
+        let mut cfg = crate::library::presets::paper();
+        let length = cfg.structure.length;
+        for edge_step in [false, true] {
+            cfg.solver.edge_step = edge_step;
+            // far beyond the structure (the run's end time then is that of a run of no length)
+            cfg.vehicles[0].wheels.x_front = 1e6;
+            cfg.solver.t_end = Some(0.1);
+            let (field, reason) = message(&cfg);
+            assert_eq!(field, "vehicles[0].x_front");
+            assert!(
+                reason.contains(&format!("never reach the rail [0, {length}] m")),
+                "{reason}"
+            );
+            // behind it: 80 m/s for 0.1 s is 8 m of travel, the front wheel ends at −492 m
+            cfg.vehicles[0].wheels.x_front = -500.0;
+            let (field, reason) = message(&cfg);
+            assert_eq!(field, "vehicles[0].x_front");
+            let rear = cfg.vehicles[0].wheel_offsets()[3];
+            assert!(
+                reason.contains(&format!("span [{rear:.4}, -492.0000] m")),
+                "{reason}"
+            );
+        }
+        // long enough to arrive: the step onto the rail, as asked for, runs
+        cfg.solver.t_end = Some(500.0 / cfg.speed);
         assert_eq!(refused_field(&cfg), None);
+        // a wheel reaching the rail's start within its rounding has arrived (the engine's rule)
+        cfg.solver.t_end = Some(0.1);
+        cfg.vehicles[0].wheels.x_front = -8.0 * (1.0 + 1e-12);
+        assert_eq!(refused_field(&cfg), None);
+        // one car of a train that stays behind is refused by its own index
+        let mut second = cfg.vehicles[0].clone();
+        second.wheels.x_front = -500.0;
+        cfg.vehicles.push(second);
+        assert_eq!(refused_field(&cfg).as_deref(), Some("vehicles[1].x_front"));
+        // unless a run on the rigid track alone is meant
+        cfg.accept_implausible = vec!["vehicles[1].x_front".into()];
+        assert_eq!(refused_field(&cfg), None);
+        cfg.accept_implausible = vec!["vehicles[2].x_front".into()]; // no such vehicle
+        assert_eq!(
+            refused_field(&cfg).as_deref(),
+            Some("accept_implausible[0]")
+        );
+        cfg.accept_implausible.clear();
+        // a quarter car standing still off the rail (speed 0) as well
+        let mut qc = crate::library::presets::paper();
+        qc.vehicles[0].model =
+            crate::config::VehicleModel::QuarterCar(crate::config::QuarterCarConfig {
+                m_c: 14e3,
+                m_w: 1.7e3,
+                k_p: 1.2e6,
+                c_p: 3e4,
+            });
+        qc.speed = 0.0;
+        qc.solver.t_end = Some(0.01);
+        qc.vehicles[0].wheels.x_front = length + 1.0;
+        assert_eq!(refused_field(&qc).as_deref(), Some("vehicles[0].x_front"));
+        qc.vehicles[0].wheels.x_front = length;
+        assert_eq!(refused_field(&qc), None);
     }
 
     /// A car whose rear wheelset stands on the pinned support at x = 0 has not crossed the

@@ -331,9 +331,12 @@ fn hint(r: &Range, v: f64) -> String {
 /// checks).
 pub fn check(cfg: &Config) -> Result<()> {
     // An entry that names no field of the table would silently accept nothing: a typo.
+    // Besides the table, a vehicle's `x_front` may be listed: a vehicle meant to run on the
+    // rigid track off the structure for the whole run (check::run).
     let known: Vec<String> = RANGES
         .iter()
         .flat_map(|r| (0..(r.get)(cfg).len()).map(move |i| path(cfg, r.field, i)))
+        .chain((0..cfg.vehicles.len()).map(|i| format!("vehicles[{i}].x_front")))
         .collect();
     for (j, a) in cfg.accept_implausible.iter().enumerate() {
         if !known.contains(a) {
@@ -341,7 +344,8 @@ pub fn check(cfg: &Config) -> Result<()> {
                 format!("accept_implausible[{j}]"),
                 a,
                 "names no field of the plausibility table in this configuration (docs/limits.md; \
-                 e.g. \"speed\", \"vehicles[0].m_c\", \"structure.couplings[1].stiffness\")",
+                 e.g. \"speed\", \"vehicles[0].m_c\", \"structure.couplings[1].stiffness\"), \
+                 nor a vehicle's x_front",
             ));
         }
     }

@@ -78,6 +78,25 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
         // Wheels may start before x = 0 and end beyond L: off the structure they run on a
         // rigid track (docs/model.md §4).
         let (rear, front) = (offs[offs.len() - 1], offs[0] + travel);
+        // A vehicle none of whose wheels ever rolls onto the rail loads nothing: the run would
+        // answer for a vehicle on rigid track and an unloaded structure, unless that is what
+        // is meant (its x_front listed in accept_implausible).
+        let (a, b) = cfg.extent(0);
+        let meant = cfg.accept_implausible.contains(&format!("{p}.x_front"));
+        if !meant && !reaches(rear, front, a, b) {
+            return Err(VtbError::config(
+                format!("{p}.x_front"),
+                v.wheels.x_front,
+                format!(
+                    "the wheels of this vehicle span [{rear:.4}, {front:.4}] m during the run ({travel:.4} m \
+                     of travel up to t = {:.6} s) and never reach the rail [{a}, {b}] m: it would load \
+                     nothing. Place the vehicle so that it runs onto the rail, or lengthen the run \
+                     (solver.t_end, or solver.tail to run the whole train over); a run on the rigid \
+                     track alone lists \"{p}.x_front\" in accept_implausible",
+                    cfg.t_end()
+                ),
+            ));
+        }
         if !profile.values.is_empty()
             && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9)
         {
@@ -90,7 +109,6 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
             ));
         }
         if cfg.solver.edge_ramp == 0.0 && !cfg.solver.edge_step {
-            let (a, b) = cfg.extent(0);
             // The engine's rule (`Structure::edge_share`): a wheel is on the rail for a ≤ x ≤ b,
             // give or take the rounding of the ends (a rear wheelset placed on x = 0, or
             // t_end = L/v reaching x = L in n·Δt), which crosses nothing.
@@ -142,7 +160,7 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
         // A force that never reaches its layer loads nothing: the run would answer for an
         // unloaded structure.
         let (a, b) = cfg.extent(li);
-        if f.x0 > b + 1e-9 || f.x0 + travel < a - 1e-9 {
+        if !reaches(f.x0, f.x0 + travel, a, b) {
             return Err(VtbError::config(
                 format!("{p}.x0"),
                 f.x0,
@@ -163,6 +181,13 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
         ));
     }
     Ok(())
+}
+
+/// Whether a load whose positions span [`lo`, `hi`] over the run meets the interval [`a`, `b`]
+/// it rolls on, with the ends' rounding the engine allows (`on_interval`).
+fn reaches(lo: f64, hi: f64, a: f64, b: f64) -> bool {
+    let on = |x: f64| on_interval(x, a, b).is_some();
+    on(lo) || on(hi) || (lo < a && hi > b)
 }
 
 /// The sampled rail profile.
