@@ -139,7 +139,7 @@ def _rewrite_stamp(ck, edit) -> None:
     journal = ck.with_name(ck.name + ".designs.jsonl")
     lines = journal.read_text().splitlines()
     first = json.loads(lines[0])
-    edit(first["vtb.optimize"]["config"])
+    edit(first["identity"]["vtb.optimize"]["config"])  # the header of a designs journal
     journal.write_text("\n".join([json.dumps(first), *lines[1:]]) + "\n")
 
 

@@ -251,34 +251,6 @@ def test_temporary_files_of_a_killed_writer_are_cleaned_by_the_next_write(tmp_pa
     assert not dead.exists() and mine.exists() and (tmp_path / "ck.npz").read_bytes() == b"x"
 
 
-def _stamp(path, **changes):
-    import json
-    from vtb.studies.journal import _OPENING
-
-    lines = path.read_text().split("\n")
-    m = _OPENING.match(lines[0])
-    head = json.loads(lines[0][m.end():])
-    head.update(changes)
-    lines[0] = m.group(0) + json.dumps(head, sort_keys=True)
-    path.write_text("\n".join(lines))
-    return head
-
-
-def test_a_journal_says_what_wrote_it_and_refuses_another_version(tmp_path):
-    out = tmp_path / "s.csv"
-    vtb.study(small_config(), {"speed": [60.0, 70.0]}, out=out, progress=False)
-    first = out.read_text().split("\n", 1)[0]
-    assert first.startswith("# vtb study journal ")
-    head = _stamp(out)
-    assert head["vtb"] == vtb.__version__
-    _stamp(out, vtb="0.0.1")
-    e = refused(lambda: vtb.study(small_config(), {"speed": [60.0, 70.0]}, out=out, progress=False), "out", cls=vtb.StaleFileError)
-    assert "written by vtb 0.0.1" in str(e) and e.path == str(out)
-    _stamp(out, vtb=vtb.__version__, format=99)
-    e = refused(lambda: vtb.study(small_config(), {"speed": [60.0, 70.0]}, out=out, progress=False), "out")
-    assert "newer vtb" in str(e) and "damaged" not in str(e)
-
-
 def test_a_journal_reads_back_in_grid_order_whatever_the_completion_order(tmp_path):
     from vtb.studies.grid import read_journal
 
@@ -292,31 +264,6 @@ def test_a_journal_reads_back_in_grid_order_whatever_the_completion_order(tmp_pa
     for k in before.columns:
         assert (before.columns[k] == after.columns[k]).all(), k
     assert list(after.columns["speed"]) == [60.0, 60.0, 70.0, 70.0] and list(after.columns["k_t"]) == [1e8, 2e8, 1e8, 2e8]
-
-
-def _rewrite_checkpoint(path, **changes):
-    import json
-
-    import numpy as np
-
-    with np.load(path, allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files}
-    header = json.loads(str(arrays.pop("header")))
-    header.update(changes)
-    with open(path, "wb") as f:
-        np.savez(f, header=np.array(json.dumps(header)), **arrays)
-
-
-def test_a_checkpoint_of_another_version_is_refused_and_a_newer_one_says_so(tmp_path):
-    ck = tmp_path / "opt.npz"
-    kw = dict(variables={"k_t": (1e7, 1e9, "log")}, objectives=["rail_acc_rms", "slab_acc_rms"], pop_size=4, seed=1, progress=False, checkpoint=ck)
-    vtb.optimize(small_config(), n_gen=1, **kw)
-    _rewrite_checkpoint(ck, vtb="0.0.1")
-    e = refused(lambda: vtb.optimize(small_config(), n_gen=2, **kw), "checkpoint", cls=vtb.StaleFileError, within=30)
-    assert "written by vtb 0.0.1" in str(e)
-    _rewrite_checkpoint(ck, vtb="9.0.0", format="vtb.moga checkpoint 2")
-    e = refused(lambda: vtb.optimize(small_config(), n_gen=2, **kw), "checkpoint", within=30)
-    assert "newer vtb" in str(e) and "damaged" not in str(e)
 
 
 # figures and warnings -----------------------------------------------------------------------

@@ -15,7 +15,7 @@ import types
 
 from .analysis import comfort, spectra
 from .config import irregularity
-from .config.gateway import __version__
+from .config.gateway import RESULTS_EPOCH, __version__
 from .config.fields import (
     Config,
     Coupling,
@@ -66,7 +66,7 @@ __all__ = [
     "RayleighRatio", "Solver", "Structure", "TIDs", "DamperGroup", "Vehicle", "QuarterCar", "Irregularity", "IrregularityWarning", "irregularity",
     "ConfigError", "StaleFileError", "OutputError", "MissingExtraError", "ConvergenceError", "SolverError", "VtbError", "Result", "simulate",
     "simulate_batch", "load", "metric_unit", "assembled_matrices", "irregularity_profile", "paper_config", "paper_irregularity", "crh3_car", "examples", "example_config",
-    "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__",
+    "moving_load_config", "FeSeaReport", "fesea_report", "tids_around", "sweep", "SweepResult", "pinned_pinned_frequency", "optimize", "OptimizationResult", "__version__", "RESULTS_EPOCH",
     "low_pass", "contact_patch_half_length", "resolved_band", "ResolvedBand", "LayerBand", "ResolutionWarning", "receptance", "decay_rate", "deck_band", "spans", "modes", "Modes", "evaluate_design", "evaluate_designs", "DesignEvaluation",
     "metrics_table", "read_parquet", "to_parquet", "plausible_ranges", "study", "StudyResult", "index_names", "get_field", "set_field", "ParetoResult",
     "train", "trains", "TrainInfo", "consist_extent", "track_zones", "bridge_extent",

@@ -14,6 +14,9 @@ from .. import _core
 
 #: The version of the compiled core (and of vtb).
 __version__: str = _core.__version__
+#: The results epoch of the core: raised by every change that alters a run's results, and only
+#: then; journals and checkpoints carry it and a resume across two epochs is refused.
+RESULTS_EPOCH: int = _core.RESULTS_EPOCH
 
 
 def schema() -> dict:

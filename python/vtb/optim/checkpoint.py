@@ -27,6 +27,42 @@ def _version() -> str:
     return __version__
 
 
+def _epoch() -> int:
+    from ..config.gateway import RESULTS_EPOCH
+
+    return RESULTS_EPOCH
+
+
+def written_by() -> dict:
+    """What a journal, checkpoint or designs journal is stamped with: the vtb version and the
+    results epoch (:data:`vtb.RESULTS_EPOCH`)."""
+    return {"vtb": _version(), "epoch": _epoch()}
+
+
+def check_written_by(stamp: dict, field: str, path, where: str = "") -> None:
+    """Refuses to resume from the file ``path`` (named by ``field``) whose ``stamp`` holds a
+    results epoch other than this vtb's: an older epoch gives other results, which a resumed
+    study must not mix with this vtb's; a newer one was written by a newer vtb. A change of
+    the vtb version alone is no reason. A file from before the epochs (no ``epoch``) is
+    refused only when another vtb version wrote it."""
+    version, epoch = stamp.get("vtb"), stamp.get("epoch")
+    if epoch is None:
+        if version is not None and version != _version():
+            raise stale_file_error(field, path, f"{where}written by vtb {version}, which carried no results epoch; this vtb {_version()} "
+                                                "may give other results, and a resume must not mix the two: start afresh (another path, "
+                                                "or move the file aside)")
+        return
+    if isinstance(epoch, bool) or not isinstance(epoch, int):
+        raise config_error(field, str(path), f"{where}the results epoch {epoch!r} is not an integer: the file is damaged")
+    if epoch > _epoch():
+        raise stale_file_error(field, path, f"{where}written by a newer vtb ({version or 'unknown version'}, results epoch {epoch}); this "
+                                            f"vtb {_version()} has epoch {_epoch()}: upgrade vtb to resume it")
+    if epoch < _epoch():
+        raise stale_file_error(field, path, f"{where}the results of this vtb {_version()} (results epoch {_epoch()}) differ from the file's "
+                                            f"(vtb {version or 'unknown version'}, epoch {epoch}), and a resume must not mix the two: start "
+                                            "afresh (another path, or move the file aside), or finish it with the older vtb")
+
+
 def _identity(problem, algorithm, pop_size, n_gen, opts, rng, hv_ref, stop_hv, given, extra) -> dict:
     """What a checkpoint belongs to, as plain JSON values (compared on resume)."""
     try:
@@ -109,7 +145,7 @@ def write_atomically(path: Path, write: Callable) -> None:
 
 def _save_checkpoint(path: Path, identity: dict, algo, rng, n_evals: int, history: list, message: str) -> None:
     header = dict(
-        format=_CHECKPOINT_FORMAT, vtb=_version(), identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
+        format=_CHECKPOINT_FORMAT, **written_by(), identity=identity, rng=rng.bit_generator.state, n_evals=n_evals,
         message=message, history=[asdict(h) for h in history],
     )
     with writing("checkpoint", path):
@@ -143,10 +179,7 @@ def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tupl
                                f"is a {fmt!r} file of an older vtb; this vtb reads {_CHECKPOINT_FORMAT!r}: delete it to start afresh")
     if fmt != _CHECKPOINT_FORMAT:
         raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")
-    written_by = header.get("vtb")
-    if written_by is not None and written_by != _version():
-        raise stale_file_error("checkpoint", path, f"was written by vtb {written_by}; this vtb {_version()} may give other results, and a "
-                                                   "resumed run must not mix the two: delete it or choose another path")
+    check_written_by(header, "checkpoint", path)
     saved = header.get("identity")
     if saved != identity:
         differ = sorted(k for k in identity if not isinstance(saved, dict) or saved.get(k) != identity[k])

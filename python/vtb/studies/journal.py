@@ -25,7 +25,7 @@ from typing import Optional
 
 from ..config.fields import Config
 from ..errors import ConfigError, config_error, stale_file_error, writing
-from ..optim.checkpoint import write_atomically
+from ..optim.checkpoint import _version, check_written_by, write_atomically, written_by
 
 FORMAT = 1
 _STAMP = "# vtb sweep journal "
@@ -36,12 +36,6 @@ _OPENING = re.compile(r"# vtb ([a-z ]+) journal ")
 
 def stamp_opening(kind: str) -> str:
     return f"# vtb {kind} journal "
-
-
-def _version() -> str:
-    from ..config.gateway import __version__
-
-    return __version__
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,10 +138,7 @@ def parse(path: Path, field: str, layout: Optional[Layout] = None):
         keys = stamp.get("keys")
     except (ValueError, KeyError, TypeError) as e:  # ConfigError is a ValueError
         raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
-    written_by = stamp.get("vtb")
-    if written_by is not None and written_by != _version():
-        raise stale_file_error(field, path, f"line 1: written by vtb {written_by}; this vtb {_version()} may give other results, "
-                                            "and a journal must not mix the two: choose another path (or move the file aside)")
+    check_written_by(stamp, field, path, "line 1: ")
     header = next(csv.reader(lines[1:2]), None)
     if layout is None:
         n = keys if isinstance(keys, int) else 3  # journals of vtb.sweep carry no key count: b_t, k_t, c_t
@@ -222,7 +213,7 @@ def open_rows(journal: Path, config: Config, layout: Layout, kind: Optional[str]
         stamped, rows = None, {}
     stamp = config_stamp(config)
     if stamped is None:
-        head = {"format": FORMAT, "config": json.loads(stamp), "vtb": _version()}
+        head = {"format": FORMAT, "config": json.loads(stamp), **written_by()}
         sweep = layout.keys == ("b_t", "k_t", "c_t")
         if not sweep:
             head["keys"] = len(layout.keys)

@@ -26,9 +26,10 @@ from typing import Optional
 import numpy as np
 
 from ..config.fields import Config
-from ..errors import config_error, make_folder, stale_file_error
+from ..errors import config_error, make_folder, stale_file_error, writing
 from ..optim import Problem, minimize, saved_identity
 from ..optim import Result as OptimResult
+from ..optim.checkpoint import check_written_by, written_by
 from ..run.indices import index_names
 from ..run.scaleout import run_cases
 from ..run.simulate import simulate
@@ -64,8 +65,8 @@ def _saved_stamp(checkpoint: Path):
     if identity is None and journal.exists():
         try:
             with open(journal) as f:
-                identity = {"problem": json.loads(f.readline())}
-        except (OSError, ValueError):
+                identity = {"problem": _designs_header(json.loads(f.readline()))["identity"]}
+        except (OSError, ValueError, TypeError):
             return None
     try:
         return identity["problem"]["vtb.optimize"]["config"]
@@ -73,11 +74,24 @@ def _saved_stamp(checkpoint: Path):
         return None
 
 
+#: The first line of a designs journal: ``{"format": DESIGNS_FORMAT, "vtb": version, "epoch":
+#: results epoch, "identity": the optimisation's identity}``.
+DESIGNS_FORMAT = "vtb designs journal 1"
+
+
+def _designs_header(first) -> dict:
+    """A designs journal's header from its parsed first line; a journal of a vtb before the
+    header held the identity alone (no version, no epoch)."""
+    if isinstance(first, dict) and isinstance(first.get("format"), str) and first["format"].startswith("vtb designs journal "):
+        return first
+    return {"identity": first}
+
+
 @dataclasses.dataclass
 class DesignJournal:
     """The designs an optimisation has evaluated, by (b_t, k_t, c_t): ``cache`` in memory and,
-    given ``path`` (JSON lines: the optimisation's identity, then one design per line with its
-    rows), on disk, a design written as soon as all its runs finished, so that an interrupted
+    given ``path`` (JSON lines: a header — :data:`DESIGNS_FORMAT`, the vtb version, the results
+    epoch and the optimisation's identity —, then one design per line with its rows), on disk, a design written as soon as all its runs finished, so that an interrupted
     generation resumes without running it again. A run is deterministic, so nothing depends on
     what the journal holds but the time it saves."""
 
@@ -90,7 +104,16 @@ class DesignJournal:
             return
         if self.path.exists() and self.path.stat().st_size:
             lines = self.path.read_text().splitlines()
-            if json.loads(lines[0]) != json.loads(json.dumps(identity)):
+            try:
+                header = _designs_header(json.loads(lines[0]))
+            except ValueError as e:
+                raise config_error("checkpoint", str(self.path), f"line 1: not a vtb designs journal ({e})") from None
+            fmt = header.get("format", DESIGNS_FORMAT)
+            if fmt != DESIGNS_FORMAT:
+                raise stale_file_error("checkpoint", self.path, f"line 1: a {fmt!r} file, written by a newer vtb ({header.get('vtb', 'unknown version')}) "
+                                                                f"that this vtb reads as {DESIGNS_FORMAT!r}: upgrade vtb, or delete it to start afresh")
+            check_written_by(header, "checkpoint", self.path, "line 1: ")
+            if header["identity"] != json.loads(json.dumps(identity)):
                 raise stale_file_error("checkpoint", self.path, "holds the designs of another optimisation; delete it with its checkpoint to start afresh")
             for line in lines[1:]:
                 try:
@@ -99,12 +122,13 @@ class DesignJournal:
                     continue
                 self.cache[tuple(d["x"])] = d["rows"]
         else:
-            self.path.write_text(json.dumps(identity) + "\n")
+            with writing("checkpoint", self.path):
+                self.path.write_text(json.dumps({"format": DESIGNS_FORMAT, **written_by(), "identity": identity}) + "\n")
 
     def add(self, x, rows) -> None:
         self.cache[tuple(x)] = rows
         if self.path is not None:
-            with open(self.path, "a") as f:
+            with writing("checkpoint", self.path), open(self.path, "a") as f:
                 f.write(json.dumps(dict(x=[float(v) for v in x], rows=rows)) + "\n")
 
     def run(self, X: np.ndarray, configs_of, row_of, threads: Optional[int], executor=None) -> None:
