@@ -21,7 +21,7 @@ _CHECKPOINT_FORMAT = "vtb.moga checkpoint 1"
 _FORMAT_NAME, _FORMAT_NUMBER = _CHECKPOINT_FORMAT.rsplit(" ", 1)
 
 
-def _version() -> str:
+def vtb_version() -> str:
     from ..config.gateway import __version__
 
     return __version__
@@ -36,7 +36,7 @@ def _epoch() -> int:
 def written_by() -> dict:
     """What a journal, checkpoint or designs journal is stamped with: the vtb version and the
     results epoch (:data:`vtb.RESULTS_EPOCH`)."""
-    return {"vtb": _version(), "epoch": _epoch()}
+    return {"vtb": vtb_version(), "epoch": _epoch()}
 
 
 def check_written_by(stamp: dict, field: str, path, where: str = "") -> None:
@@ -47,8 +47,8 @@ def check_written_by(stamp: dict, field: str, path, where: str = "") -> None:
     refused only when another vtb version wrote it."""
     version, epoch = stamp.get("vtb"), stamp.get("epoch")
     if epoch is None:
-        if version is not None and version != _version():
-            raise stale_file_error(field, path, f"{where}written by vtb {version}, which carried no results epoch; this vtb {_version()} "
+        if version is not None and version != vtb_version():
+            raise stale_file_error(field, path, f"{where}written by vtb {version}, which carried no results epoch; this vtb {vtb_version()} "
                                                 "may give other results, and a resume must not mix the two: start afresh (another path, "
                                                 "or move the file aside)")
         return
@@ -56,9 +56,9 @@ def check_written_by(stamp: dict, field: str, path, where: str = "") -> None:
         raise config_error(field, str(path), f"{where}the results epoch {epoch!r} is not an integer: the file is damaged")
     if epoch > _epoch():
         raise stale_file_error(field, path, f"{where}written by a newer vtb ({version or 'unknown version'}, results epoch {epoch}); this "
-                                            f"vtb {_version()} has epoch {_epoch()}: upgrade vtb to resume it")
+                                            f"vtb {vtb_version()} has epoch {_epoch()}: upgrade vtb to resume it")
     if epoch < _epoch():
-        raise stale_file_error(field, path, f"{where}the results of this vtb {_version()} (results epoch {_epoch()}) differ from the file's "
+        raise stale_file_error(field, path, f"{where}the results of this vtb {vtb_version()} (results epoch {_epoch()}) differ from the file's "
                                             f"(vtb {version or 'unknown version'}, epoch {epoch}), and a resume must not mix the two: start "
                                             "afresh (another path, or move the file aside), or finish it with the older vtb")
 
@@ -175,7 +175,7 @@ def _resume(path: Path, identity: dict, algo, rng, evaluate, n_gen: int) -> tupl
         number = fmt[len(_FORMAT_NAME) + 1:]
         newer = number.isdigit() and int(number) > int(_FORMAT_NUMBER)
         raise stale_file_error("checkpoint", path, (f"was written by a newer vtb ({header.get('vtb', 'unknown version')}, {fmt!r}) that this vtb "
-                                                    f"{_version()} cannot read: upgrade vtb, or delete it to start afresh") if newer else
+                                                    f"{vtb_version()} cannot read: upgrade vtb, or delete it to start afresh") if newer else
                                f"is a {fmt!r} file of an older vtb; this vtb reads {_CHECKPOINT_FORMAT!r}: delete it to start afresh")
     if fmt != _CHECKPOINT_FORMAT:
         raise config_error("checkpoint", str(path), f"is not a {_CHECKPOINT_FORMAT!r} file")

@@ -25,7 +25,7 @@ from typing import Optional
 
 from ..config.fields import Config
 from ..errors import ConfigError, config_error, stale_file_error, writing
-from ..optim.checkpoint import _version, check_written_by, write_atomically, written_by
+from ..optim.checkpoint import check_written_by, vtb_version, write_atomically, written_by
 
 FORMAT = 1
 _STAMP = "# vtb sweep journal "
@@ -130,7 +130,7 @@ def parse(path: Path, field: str, layout: Optional[Layout] = None):
         raise bad(1, f"the journal's stamp does not parse ({type(e).__name__}: {e})") from None
     if isinstance(fmt, int) and not isinstance(fmt, bool) and fmt > FORMAT:
         raise bad(1, f"written by a newer vtb ({stamp.get('vtb', 'unknown version')}; journal format {fmt}), which this vtb "
-                     f"{_version()} (format {FORMAT}) cannot read: upgrade vtb")
+                     f"{vtb_version()} (format {FORMAT}) cannot read: upgrade vtb")
     if fmt != FORMAT:
         raise bad(1, f"journal format {fmt!r}; this vtb reads format {FORMAT}")
     try:

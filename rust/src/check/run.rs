@@ -78,25 +78,8 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
         // Wheels may start before x = 0 and end beyond L: off the structure they run on a
         // rigid track (docs/model.md §4).
         let (rear, front) = (offs[offs.len() - 1], offs[0] + travel);
-        // A vehicle none of whose wheels ever rolls onto the rail loads nothing: the run would
-        // answer for a vehicle on rigid track and an unloaded structure, unless that is what
-        // is meant (its x_front listed in accept_implausible).
+        on_the_rail(cfg, &p, v.wheels.x_front, (rear, front), travel)?;
         let (a, b) = cfg.extent(0);
-        let meant = cfg.accept_implausible.contains(&format!("{p}.x_front"));
-        if !meant && !reaches(rear, front, a, b) {
-            return Err(VtbError::config(
-                format!("{p}.x_front"),
-                v.wheels.x_front,
-                format!(
-                    "the wheels of this vehicle span [{rear:.4}, {front:.4}] m during the run ({travel:.4} m \
-                     of travel up to t = {:.6} s) and never reach the rail [{a}, {b}] m: it would load \
-                     nothing. Place the vehicle so that it runs onto the rail, or lengthen the run \
-                     (solver.t_end, or solver.tail to run the whole train over); a run on the rigid \
-                     track alone lists \"{p}.x_front\" in accept_implausible",
-                    cfg.t_end()
-                ),
-            ));
-        }
         if !profile.values.is_empty()
             && (rear < profile.x0 - 1e-9 || front > profile.x_last() + 1e-9)
         {
@@ -178,6 +161,35 @@ pub(super) fn loads(cfg: &Config, travel: f64, profile: &Profile) -> Result<()> 
             "vehicles",
             "[]",
             "nothing loads the structure: give at least one vehicle or moving force",
+        ));
+    }
+    Ok(())
+}
+
+/// A vehicle none of whose wheels ever rolls onto the rail loads nothing: the run would
+/// answer for a vehicle on rigid track and an unloaded structure, unless that is what is
+/// meant (its x_front listed in accept_implausible). `(rear, front)`: its wheels' span.
+fn on_the_rail(
+    cfg: &Config,
+    p: &str,
+    x_front: f64,
+    (rear, front): (f64, f64),
+    travel: f64,
+) -> Result<()> {
+    let (a, b) = cfg.extent(0);
+    let meant = cfg.accept_implausible.contains(&format!("{p}.x_front"));
+    if !meant && !reaches(rear, front, a, b) {
+        return Err(VtbError::config(
+            format!("{p}.x_front"),
+            x_front,
+            format!(
+                "the wheels of this vehicle span [{rear:.4}, {front:.4}] m during the run ({travel:.4} m \
+                 of travel up to t = {:.6} s) and never reach the rail [{a}, {b}] m: it would load \
+                 nothing. Place the vehicle so that it runs onto the rail, or lengthen the run \
+                 (solver.t_end, or solver.tail to run the whole train over); a run on the rigid \
+                 track alone lists \"{p}.x_front\" in accept_implausible",
+                cfg.t_end()
+            ),
         ));
     }
     Ok(())
