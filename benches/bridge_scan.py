@@ -9,11 +9,17 @@ each axle load (the model is one rail with its share of the deck); the girder ha
 damping for prestressed concrete (1 %, no Δζ at 32 m) fitted over n0 … 30 Hz; the deck's
 acceleration is low-passed at 30 Hz at mid-span of the middle girder.
 
-    python benches/bridge_scan.py [--threads 2] [--dt 1e-3] [--every 1] [--out benches/results/bridge_scan]
+    python benches/bridge_scan.py [--threads 2] [--dt 2e-3] [--every 1] [--out benches/results/bridge_scan] [--check-dt]
 
 ``--every k`` runs every k-th speed only (a quick estimate; the printed figure scales it to the
 full scan by the simulated time). Resumable: the journals in --out; ``--fresh`` starts over (a
-fair timing needs it).
+fair timing needs it). ``--check-dt`` reruns the governing cases (acceleration, deflection) at
+dt/2 and dt/4 and says whether their peaks agree within 0.1 %.
+
+Measured 2026-12-05 (``PYTHONPATH=python python benches/bridge_scan.py --fresh --check-dt``,
+load average 8.7–9.2 on the 2 cores): 770 runs in 85.5 s at dt = 2 ms, none failed; largest
+deck acceleration 0.812 m/s² (HSLM-A1 at 405 km/h); dt = 2 ms passes the check (peaks within
+0.02 % of dt/4). See docs/bridge-check.md, "Performance".
 """
 
 import argparse
