@@ -191,6 +191,12 @@ def case_synthesis():
     return result_digest(vtb.simulate(c, progress=False))
 
 
+def case_synthesis_load_train():
+    c = with_dampers(one_span())
+    c.forces = [vtb.MovingForce(magnitude=m, x0=x) for m, x in ((9e4, -1.0), (6e4, 2.0), (8e4, 17.0), (7e4, 31.0))]
+    return result_digest(vtb.simulate(c, progress=False))
+
+
 def case_synthesis_batch():
     c = one_span()
     c.tids = vtb.tids_around(c, count=3)

@@ -9,11 +9,12 @@ use crate::check;
 use crate::config::{Config, Profile};
 use crate::error::{Result, VtbError};
 use crate::model::Model;
+use crate::model::structure::Structure;
 use crate::outputs::{Record, RunResult};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, OnceLock};
 
 /// Validates, assembles and integrates one configuration.
 pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&Control>) -> Result<RunResult> {
@@ -181,28 +182,47 @@ pub fn run_batch_each(
     }
     let cancelled = || cancel.is_some_and(Control::cancelled);
     let threads = rayon::current_num_threads();
-    groups.par_iter().for_each(|members| {
-        let first = &jobs[members[0]];
-        let model = if cancelled() {
-            Err(VtbError::Cancelled)
-        } else {
-            Model::build(first.config.clone(), (*first.profile).clone())
-        };
-        let mut chunks = Vec::new();
-        let mut at = 0;
-        for w in lane_widths(members.len(), threads, opts.max_lanes) {
-            chunks.push(&members[at..at + w]);
-            at += w;
-        }
-        chunks.into_par_iter().for_each(|chunk| {
-            let res = match &model {
-                Err(e) => vec![Err(e.clone()); chunk.len()],
-                Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
+    // The groups' structures, each assembled once for the groups that share it (a scan's
+    // speeds): its first group builds it, the others wait for it and take a copy.
+    let mut shared: BTreeMap<String, usize> = BTreeMap::new();
+    let structure_of: Vec<usize> = groups
+        .iter()
+        .map(|m| {
+            let key = Structure::key(&jobs[m[0]].config);
+            let next = shared.len();
+            *shared.entry(key).or_insert(next)
+        })
+        .collect();
+    let structures: Vec<OnceLock<Result<Structure>>> =
+        (0..shared.len()).map(|_| OnceLock::new()).collect();
+    groups
+        .par_iter()
+        .zip(&structure_of)
+        .for_each(|(members, &s)| {
+            let first = &jobs[members[0]];
+            let model = if cancelled() {
+                Err(VtbError::Cancelled)
+            } else {
+                let structure = structures[s].get_or_init(|| Structure::build(&first.config));
+                structure.clone().map(|st| {
+                    Model::with_structure(first.config.clone(), (*first.profile).clone(), st)
+                })
             };
-            sink(chunk.iter().copied().zip(res).collect());
+            let mut chunks = Vec::new();
+            let mut at = 0;
+            for w in lane_widths(members.len(), threads, opts.max_lanes) {
+                chunks.push(&members[at..at + w]);
+                at += w;
+            }
+            chunks.into_par_iter().for_each(|chunk| {
+                let res = match &model {
+                    Err(e) => vec![Err(e.clone()); chunk.len()],
+                    Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
+                    Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
+                };
+                sink(chunk.iter().copied().zip(res).collect());
+            });
         });
-    });
 }
 
 /// One lockstep group of `chunk.len()` ∈ {1, 2, 4, 8} jobs on a shared model (on its

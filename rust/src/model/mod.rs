@@ -30,12 +30,18 @@ impl Model {
     /// (`crate::check::validated`).
     pub fn build(cfg: Config, profile: Profile) -> Result<Self> {
         let structure = Structure::build(&cfg)?;
+        Ok(Self::with_structure(cfg, profile, structure))
+    }
+
+    /// The model of `cfg` on a structure assembled already (from a configuration of the
+    /// same `Structure::key`).
+    pub fn with_structure(cfg: Config, profile: Profile, structure: Structure) -> Self {
         let cars = cfg.vehicles.iter().map(Vehicle::new).collect();
-        Ok(Self {
+        Self {
             cfg,
             profile,
             structure,
             cars,
-        })
+        }
     }
 }

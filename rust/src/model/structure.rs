@@ -34,6 +34,20 @@ pub struct Structure {
 }
 
 impl Structure {
+    /// The configuration as `build` reads it: the run's duration, its moving forces and —
+    /// but on a hybrid rail, whose correction is tuned to the speed — its speed cleared.
+    /// Configurations with equal keys assemble equal structures (the speeds of a scan share
+    /// one; `engine::batch`).
+    pub fn key(cfg: &Config) -> String {
+        let mut c = cfg.clone();
+        c.solver.t_end = None;
+        c.forces.clear();
+        if c.discretisation.method != Method::Hybrid {
+            c.speed = 0.0;
+        }
+        serde_json::to_string(&c).expect("a config serialises")
+    }
+
     /// Assembles the structure of a validated config.
     pub fn build(cfg: &Config) -> Result<Self> {
         let s = &cfg.structure;
@@ -517,6 +531,37 @@ mod tests {
             cp.positions.retain(|&x| x <= length + 1e-9);
         }
         Structure::build(&cfg).unwrap()
+    }
+
+    /// The speeds, durations and moving forces of a scan share one structure key, and the
+    /// structures built from them are equal; on a hybrid rail the speed stays in the key.
+    #[test]
+    fn a_scan_shares_its_structure() {
+        let mut a = crate::library::presets::paper_converged();
+        a.structure.length = 32.0;
+        for cp in a.structure.couplings.iter_mut() {
+            cp.positions.retain(|&x| x <= 32.0 + 1e-9);
+        }
+        let mut b = a.clone();
+        b.speed = 2.0 * a.speed + 1.0;
+        b.solver.t_end = Some(0.7);
+        b.forces.push(crate::config::MovingForceConfig {
+            magnitude: 1e5,
+            x0: 3.0,
+            layer: None,
+        });
+        assert_eq!(Structure::key(&a), Structure::key(&b));
+        let (sa, sb) = (Structure::build(&a).unwrap(), Structure::build(&b).unwrap());
+        for (x, y) in [(&sa.m, &sb.m), (&sa.k, &sb.k), (&sa.c, &sb.c)] {
+            assert_eq!(
+                (&x.row_ptr, &x.col_idx, &x.values),
+                (&y.row_ptr, &y.col_idx, &y.values)
+            );
+        }
+        let hybrid = crate::library::presets::paper();
+        let mut faster = hybrid.clone();
+        faster.speed += 1.0;
+        assert_ne!(Structure::key(&hybrid), Structure::key(&faster));
     }
 
     /// Half-bandwidth of M + K + C (with the layers' own meshes) in `order`.

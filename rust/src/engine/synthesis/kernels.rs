@@ -174,6 +174,33 @@ pub(super) fn project(red: &Reduction, s: &Shape, out: &mut CVec) {
     })
 }
 
+/// out = Σ_m P_m·ψᵀs_m: the moving forces' modal force in one pass over the modes, block by
+/// block (each force's block of ψᵀs made in a stack buffer and added while in cache), the
+/// forces off the structure (an all-zero shape) skipped. Each mode's value takes the same
+/// operations in the same order as `project` then P·ψᵀs added force by force, so the result
+/// is that sum's bits.
+pub(super) fn load_movers(red: &Reduction, shapes: &[Shape], magnitudes: &[f64], out: &mut CVec) {
+    crate::wide!(<ONE> (red: &Reduction = red, shapes: &[Shape] = shapes, p: &[f64] = magnitudes, or: &mut [f64] = &mut out.re, oi: &mut [f64] = &mut out.im) {
+        or.fill(0.0);
+        oi.fill(0.0);
+        let (mut br, mut bi) = ([0.0; BLOCK], [0.0; BLOCK]);
+        let on = |s: &&Shape| s.values.iter().any(|&v| v != 0.0);
+        let n = or.len();
+        for b0 in (0..n).step_by(BLOCK) {
+            let b1 = (b0 + BLOCK).min(n);
+            let (yr, yi) = (&mut or[b0..b1], &mut oi[b0..b1]);
+            let (tr, ti) = (&mut br[..b1 - b0], &mut bi[..b1 - b0]);
+            for (s, &pm) in shapes.iter().zip(p).filter(|(s, _)| on(s)) {
+                project_block(red, s, b0, b1, tr, ti);
+                for j in 0..yr.len() {
+                    yr[j] = pm.mul_add(tr[j], yr[j]);
+                    yi[j] = pm.mul_add(ti[j], yi[j]);
+                }
+            }
+        }
+    })
+}
+
 /// The modes' step compliance between rail DOFs, D(k, k + d) = Re Σ a1·ψ_k·ψ_{k+d} for
 /// d < `span` (the longest wheel shape). A wheel's own step compliance Re Σ a1·(ψᵀs)² = sᵀDs
 /// is then a sum over its few DOFs, not a pass over the modes every step; the table depends
@@ -451,6 +478,43 @@ mod tests {
             }
         }
         out
+    }
+
+    /// The moving forces' modal force against its definition Σ_m P_m·Σ_k s_mk·ψ_k, with
+    /// forces off the structure (zero shapes) among them and more modes than one block.
+    #[test]
+    fn moving_loads_match_their_definition() {
+        let red = reduction(40, 2 * BLOCK + 24);
+        let shapes: Vec<Shape> = (0..7)
+            .map(|m| Shape {
+                start: 3 * m,
+                values: if m % 3 == 2 {
+                    vec![0.0; 4]
+                } else {
+                    (0..4).map(|k| 0.2 + (m + k) as f64).collect()
+                },
+            })
+            .collect();
+        let p: Vec<f64> = (0..7).map(|m| -8e4 + 3e4 * m as f64).collect();
+        let mut got = CVec::zeros(red.stride);
+        load_movers(&red, &shapes, &p, &mut got);
+        let mut want = CVec::zeros(red.stride);
+        for (s, pm) in shapes.iter().zip(&p) {
+            let psi = naive_projection(&red, s);
+            for j in 0..red.stride {
+                want.re[j] += pm * psi.re[j];
+                want.im[j] += pm * psi.im[j];
+            }
+        }
+        let scale = want
+            .re
+            .iter()
+            .chain(&want.im)
+            .fold(0.0_f64, |a, x| a.max(x.abs()));
+        for j in 0..red.stride {
+            assert!((got.re[j] - want.re[j]).abs() <= 1e-12 * scale);
+            assert!((got.im[j] - want.im[j]).abs() <= 1e-12 * scale);
+        }
     }
 
     /// The projection (rows four at a time, zeros skipped) against the definition, for shapes

@@ -24,21 +24,16 @@ impl<const W: usize> SynthesisSide<'_, W> {
 
     /// The moving forces' shapes at t into `shapes` and their modal force Σ P·ψᵀs into `gk`.
     fn movers_at(&mut self, t: f64, ahead: bool) {
-        let (st, red, v) = (&self.model.structure, self.red, self.model.cfg.speed);
+        let (st, v) = (&self.model.structure, self.model.cfg.speed);
         let (gk, shapes) = if ahead {
             (&mut self.gk_ahead, &mut self.shapes_ahead)
         } else {
             (&mut self.gk_now, &mut self.shapes_now)
         };
-        gk.clear();
         for (mv, sh) in self.movers.iter().zip(shapes.iter_mut()) {
             st.shape_into(mv.layer, mv.x0 + v * t, sh);
-            kernels::project(red, sh, &mut self.mover_psi);
-            for j in 0..gk.re.len() {
-                gk.re[j] = mv.magnitude.mul_add(self.mover_psi.re[j], gk.re[j]);
-                gk.im[j] = mv.magnitude.mul_add(self.mover_psi.im[j], gk.im[j]);
-            }
         }
+        kernels::load_movers(self.red, shapes, &self.mover_magnitudes, gk);
     }
 
     /// The rail's residual displacement at s under the rail's moving forces (now).

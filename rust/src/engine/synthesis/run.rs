@@ -261,7 +261,8 @@ pub(super) struct SynthesisSide<'a, const W: usize> {
     pub(super) shapes_ahead: Vec<Shape>,
     pub(super) gk_now: CVec,
     pub(super) gk_ahead: CVec,
-    pub(super) mover_psi: CVec,
+    /// Each moving force's magnitude, in `movers` order (the kernel's input).
+    pub(super) mover_magnitudes: Vec<f64>,
     /// Each lane's free modal state Q̃ for the coming step.
     pub(super) q_free: [CVec; W],
     // Per-step values and scratch (allocated once).
@@ -377,10 +378,10 @@ impl<'a, const W: usize> SynthesisSide<'a, W> {
             ports,
             shapes_now: mover_shapes(),
             shapes_ahead: mover_shapes(),
+            mover_magnitudes: movers.iter().map(|m| m.magnitude).collect(),
             movers,
             gk_now: CVec::zeros(n),
             gk_ahead: CVec::zeros(n),
-            mover_psi: CVec::zeros(n),
             q_free: std::array::from_fn(|_| CVec::zeros(n)),
             diag: vec![0.0; nw],
             rail_step: red.rail_step_compliance(&coef, dt, span),
