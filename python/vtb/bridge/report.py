@@ -128,7 +128,8 @@ def markdown(a: Assessment, files: dict) -> str:
               f"(1.2 × line speed, EN 1991-2 §6.4.6.2(1)) every {s.step * KMH:.3g} km/h, 5 times finer around each resonance n0·D/i.",
               f"- Structure: {a.config.structure.length:g} m, layers {', '.join(l.name for l in a.config.structure.layers)} "
               f"(deck: {a.config.structure.layers[-1].name}), {a.config.discretisation.method} discretisation; "
-              f"observation point x = {(a.config.output.points or [a.config.structure.length / 2])[0]:g} m.",
+              f"observation points x = {', '.join(f'{x:g}' for x in (a.config.output.points or [a.config.structure.length / 2]))} m"
+              + (" (the quarter, middle and three-quarter points of every span; the largest response governs)." if len(a.config.structure.layers) > 1 else "."),
               f"- Trains: {', '.join(s.trains)}; each axle's share on the model {s.share:g}; mass bounds "
               + ", ".join(f"{k} × {v:g}" for k, v in s.mass_bounds.items()) + ".",
               f"- Time step {a.config.solver.dt:.3g} s; {s.tail:g} s recorded after the last axle.",
@@ -141,9 +142,9 @@ def markdown(a: Assessment, files: dict) -> str:
               f"- Damping: {a.damping.describe()}; Rayleigh's law fitted to it at n0 = {a.n0:.3g} Hz and {a.band:.3g} Hz, "
               "so that every mode between has at most the code's ratio: achieved "
               + ", ".join(f"{f:.2f} Hz: {100 * z:.3f} %" for f, z in zip(a.frequencies, a.achieved)) + ".",
-              f"- LM71 (EN 1991-2 §6.3.2) × α = {s.alpha:g}, static, on the same structure: {1e3 * a.lm71:.4g} mm at the point; "
+              f"- LM71 (EN 1991-2 §6.3.2) × α = {s.alpha:g}, static, on the same structure: {1e3 * a.lm71:.4g} mm, the largest over the points; "
               f"Φ{'2' if s.maintenance == 'careful' else '3'} = {a.phi:.4g} (§6.4.5.2, LΦ = {s.l_phi or s.span:g} m).",
-              "- φ'dyn = max dynamic / static deflection − 1 at the observation point (deflection-based; the mid-span moment is "
+              "- φ'dyn = max dynamic / static deflection − 1 at the point where the train's dynamic deflection is largest (deflection-based; the mid-span moment is "
               "not computed by this version); φ'' of Annex C at the line speed, halved for carefully maintained track (eq. 6.15).",
               "- Moving loads: the axles are constant forces on the top layer; the vehicles' own dynamics are left out, "
               "for which Δζ (eq. 6.13) stands in below 30 m.", "",
@@ -164,8 +165,8 @@ def markdown(a: Assessment, files: dict) -> str:
     else:
         lines += ["(No figures: matplotlib is not installed.)", ""]
     lines += ["## Not covered", "",
-              "- The acceleration and deflection are taken at one point (the configuration's first observation point), "
-              "not searched along the deck.",
+              "- The deck is searched at the quarter, middle and three-quarter points of every span, not between them"
+              + ("." if len(a.config.structure.layers) > 1 else "; a single-layer model is observed at its first observation point only."),
               "- HSLM-B's N and d (Fig. 6.13), Fig. A2.3's L/δ and Annex F's (v/n0)lim are not encoded: they are inputs.",
               "- The bending moment's dynamic factor is not computed; φ'dyn is deflection-based.", ""]
     return "\n".join(lines)
