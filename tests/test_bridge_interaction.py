@@ -135,3 +135,23 @@ def test_the_scan_reads_the_deck_at_every_point_and_the_largest_governs():
     peaks = np.array([np.max(np.abs(run.displacement(deck, j))) for j in range(len(cfg.output.points))])
     assert res.columns["disp"][0] == pytest.approx(peaks.max(), rel=1e-9)
     assert res.columns["disp_x"][0] == pytest.approx(cfg.output.points[int(np.argmax(peaks))])
+
+
+def test_the_report_sets_the_interaction_beside_the_moving_loads(tmp_path):
+    """``vehicles`` adds the section "beyond the code": the interaction scan runs over the
+    moving-load scan's speeds, journaled beside it, and its row holds both peaks."""
+    settings = dict(span=L, bridge_type="prestressed_concrete", track="ballasted", line_speed=250 / 3.6, v_min=230 / 3.6,
+                    step=10 / 3.6, trains=["velaro_e"], vehicles=["velaro_e"], dt=1e-3)
+    a = vtb.bridge_check(_beam(), settings, tmp_path / "check", progress=False, figures=False)
+    text = (tmp_path / "check" / "report.md").read_text()
+    assert "## Beyond the code" in text and (tmp_path / "check" / "interaction.csv").is_file()
+    assert np.array_equal(np.sort(a.interaction.columns["speed"]), np.sort(a.scan.columns["speed"]))
+    peak = np.nanmax(a.interaction.columns["acc"])
+    row = next(line for line in text.splitlines() if line.startswith("| velaro_e | nominal |"))
+    assert f"{peak:.4g}" in row and f"{np.nanmax(a.scan.columns['acc']):.4g}" in row
+    assert a.damping.interaction > 0 and "without Δζ" not in text.split("## Beyond")[0]
+    assert "no Δζ" in text.split("## Beyond")[1]
+    assert all(str(tmp_path / "check" / "interaction") in p for p in a.interaction.journals.values())
+    with pytest.raises(vtb.ConfigError) as e:
+        vtb.bridge_check(_beam(), {**settings, "vehicles": ["HSLM-A1"]}, tmp_path / "bad", progress=False)
+    assert e.value.field == "bridge_check.vehicles"

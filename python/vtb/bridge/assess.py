@@ -19,6 +19,7 @@ from ..errors import config_error
 from .checks import (SAFETY_DEFLECTION_RATIO, Check, FlowChart, acceleration_limit, dynamic_analysis_required, phi_2, phi_3,
                      phi_irregularity, verdict)
 from .damping import CodeDamping, achieved_ratios, apply_code_damping, code_damping
+from .interaction import interaction_scan
 from .load_trains import load_train, resonant_speeds
 from .scan import ScanResult, scan_speeds, span_points, speed_scan, with_band
 from .settings import BridgeCheck
@@ -57,7 +58,9 @@ class Assessment:
     ``band`` (Hz); ``damping`` (the code's) with its ``achieved`` ratios (−) at ``frequencies``
     in the band; ``flow_chart``; ``scan``; ``lm71`` (largest static deflection under α·LM71
     over the observation points, m) and
-    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time."""
+    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time;
+    ``interaction``: the scan of ``settings.vehicles`` with full interaction (Table 6.6's
+    damping without Δζ), or None."""
 
     settings: BridgeCheck
     config: Config
@@ -73,6 +76,7 @@ class Assessment:
     envelopes: list
     checks: list = field(default_factory=list)
     seconds: float = 0.0
+    interaction: Optional[ScanResult] = None
 
     @property
     def passed(self) -> Optional[bool]:
@@ -155,6 +159,11 @@ def assess(config: Config, settings: BridgeCheck, out: Union[str, Path, None] = 
     result = Assessment(settings, cfg, n0, freqs, band, damping, achieved,
                         dynamic_analysis_required(settings.span, n0, settings.line_speed, settings.simple_structure, settings.continuous),
                         scan, lm71, phi, envelopes)
+    if settings.vehicles:
+        plain = apply_code_damping(cfg, code_damping(settings.bridge_type, settings.span, False), n0, band)
+        result.interaction = interaction_scan(plain, settings.vehicles, speeds, band=band, mass_bounds=settings.mass_bounds,
+                                              tail=settings.tail, out=None if out is None else Path(out) / "interaction",
+                                              executor=executor, threads=threads, progress=progress)
     result.checks = checks_of(result)
     result.seconds = time.perf_counter() - t0
     return result
