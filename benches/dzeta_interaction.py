@@ -55,6 +55,9 @@ def span_model(span: float) -> tuple:
     lower, upper = n0_limits(span)
     target = math.sqrt(lower * upper)
     girder = cfg.structure.layers[-1]
+    mass = sum(l.density * l.area for l in cfg.structure.layers)  # kg/m, all on the girder
+    bearings = span - 2 * vtb.config.spans.BEARING_OFFSET
+    girder.inertia = (2 * target * bearings**2 / math.pi) ** 2 * mass / girder.youngs_modulus  # Euler–Bernoulli first guess
     for _ in range(2):  # n0 ∝ √I nearly (the track adds a little stiffness)
         girder.inertia *= (target / float(deck_frequencies(cfg, 12 * target)[0])) ** 2
     freqs = deck_frequencies(cfg, 12 * target)
