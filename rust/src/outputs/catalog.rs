@@ -521,19 +521,28 @@ mod tests {
             "pad0_force_range",
             "pad1_force_range",
             DECK,
+            "deck_acc_max_p1",
+            "deck_disp_max_p0",
         ] {
             assert!(names.iter().any(|k| k == n), "{n}");
         }
-        assert!(
-            !names.iter().any(|k| k == "car2_comfort_aw"
-                || k == "wheel8_force_max"
-                || k == "pad2_force_range")
-        );
+        assert!(!names.iter().any(|k| k == "car2_comfort_aw"
+            || k == "wheel8_force_max"
+            || k == "pad2_force_range"
+            || k == "deck_acc_max_p2"));
+        assert!(every_point(&cfg), "every index asked: every point recorded");
         assert!(kind_of(&cfg, "rail_acc_rms").is_some_and(|k| k.unit == "m/s²"));
         assert!(kind_of(&cfg, "pad1_force_range").is_some_and(|k| k.unit == "N"));
         assert!(kind_of(&cfg, "rail_acc_L1000").is_none());
         cfg.output.indices = Some(vec![DECK.into()]);
         assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
+        assert!(
+            !every_point(&cfg),
+            "the first point's deck index: the first point only"
+        );
+        cfg.output.indices = Some(vec!["deck_disp_max_p1".into()]);
+        assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
+        assert!(every_point(&cfg));
         cfg.structure.layers.truncate(1);
         assert!(!index_names(&cfg).iter().any(|k| k == DECK));
     }
