@@ -11,6 +11,9 @@ acceleration is low-passed at 30 Hz at mid-span of the middle girder.
 
     python benches/bridge_scan.py [--threads 2] [--dt 2e-3] [--every 1] [--out benches/results/bridge_scan] [--check-dt]
 
+``--vehicles velaro_e crh3`` runs those library trains as vehicles with full interaction
+instead (smooth rail, the same structure and damping; target: at most 20 minutes on 2 cores);
+``--workers n`` runs the scan on a local Dask cluster of n one-thread workers instead of threads.
 ``--every k`` runs every k-th speed only (a quick estimate; the printed figure scales it to the
 full scan by the simulated time). Resumable: the journals in --out; ``--fresh`` starts over (a
 fair timing needs it). ``--check-dt`` reruns the governing cases (acceleration, deflection) at
@@ -23,6 +26,7 @@ deck acceleration 0.812 m/s² (HSLM-A1 at 405 km/h); dt = 2 ms passes the check 
 """
 
 import argparse
+import contextlib
 import os
 import shutil
 import time
@@ -32,9 +36,11 @@ import numpy as np
 
 import vtb
 from vtb.bridge.damping import apply_code_damping, code_damping
+from vtb.bridge.interaction import interaction_scan, with_vehicles
 from vtb.bridge.load_trains import apply_load_train, load_train
 from vtb.bridge.scan import deck_indices, speed_scan, with_band
 from vtb.bridge.static import deck_frequencies
+from vtb.run.scaleout import local_cluster
 
 SPANS = [32.0] * 10
 TRAINS = [f"HSLM-A{i}" for i in range(1, 11)]
@@ -88,25 +94,34 @@ def main(argv=None):
     p.add_argument("--out", default="benches/results/bridge_scan")
     p.add_argument("--fresh", action="store_true", help="delete the journals first")
     p.add_argument("--check-dt", action="store_true", help="after the scan, rerun its governing case at dt/2 and dt/4")
+    p.add_argument("--vehicles", nargs="+", help="library trains run as vehicles with full interaction instead of HSLM-A")
+    p.add_argument("--workers", type=int, help="run on a local Dask cluster of this many workers")
     args = p.parse_args(argv)
     if args.fresh and Path(args.out).exists():
         shutil.rmtree(args.out)
     cfg = structure(args.dt)
-    warm = apply_load_train(cfg, load_train("HSLM-A1"), share=0.5)
+    trains = args.vehicles or TRAINS
+    warm = with_vehicles(cfg, trains[0]) if args.vehicles else apply_load_train(cfg, load_train("HSLM-A1"), share=0.5)
     warm.speed = 400 / 3.6
     vtb.simulate(warm, progress=False)  # the reduction built (or loaded) before the clock starts
     speeds = SPEEDS_KMH[:: args.every] / 3.6
     load = os.getloadavg()
-    t0 = time.perf_counter()
-    res = speed_scan(cfg, TRAINS, speeds, band=BAND, share=0.5, tail=0.5, out=args.out, threads=args.threads)
-    seconds = time.perf_counter() - t0
-    full = sum((sum(SPANS) + 1.0 + load_train(t).length) / (v / 3.6) + 0.5 for t in TRAINS for v in SPEEDS_KMH)
-    done = sum((sum(SPANS) + 1.0 + load_train(t).length) / v + 0.5 for t in TRAINS for v in speeds)
+    with contextlib.ExitStack() as stack:
+        executor = stack.enter_context(local_cluster(args.workers, preload=warm)) if args.workers else None
+        t0 = time.perf_counter()
+        if args.vehicles:
+            res = interaction_scan(cfg, trains, speeds, band=BAND, tail=0.5, out=args.out, executor=executor, threads=args.threads)
+        else:
+            res = speed_scan(cfg, trains, speeds, band=BAND, share=0.5, tail=0.5, out=args.out, executor=executor, threads=args.threads)
+        seconds = time.perf_counter() - t0
+    full = sum((sum(SPANS) + 1.0 + load_train(t).length) / (v / 3.6) + 0.5 for t in trains for v in SPEEDS_KMH)
+    done = sum((sum(SPANS) + 1.0 + load_train(t).length) / v + 0.5 for t in trains for v in speeds)
     failed = int(np.sum(res.columns["error"] != ""))
     gov = res.governing("acc")
-    print(f"bridge scan: {len(res)} runs ({failed} failed) in {seconds:.1f} s on {args.threads} threads, dt = {args.dt:g} s")
+    where = f"{args.workers} Dask workers" if args.workers else f"{args.threads} threads"
+    print(f"bridge scan{' with interaction' if args.vehicles else ''}: {len(res)} runs ({failed} failed) in {seconds:.1f} s on {where}, dt = {args.dt:g} s")
     if args.every > 1:
-        print(f"full scan (770 runs) estimated at {seconds * full / done:.0f} s ({seconds * full / done / 60:.1f} min) by simulated time")
+        print(f"full scan ({len(trains) * len(SPEEDS_KMH)} runs) estimated at {seconds * full / done:.0f} s ({seconds * full / done / 60:.1f} min) by simulated time")
     print(f"largest deck acceleration {gov['acc']:.3f} m/s² ({gov['train']} at {gov['speed'] * 3.6:.0f} km/h)")
     print("machine load before: %.2f %.2f %.2f, after: %.2f %.2f %.2f (1, 5, 15 min averages)" % (*load, *os.getloadavg()))
     res.to_csv(Path(args.out) / "envelopes.csv")

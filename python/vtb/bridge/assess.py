@@ -19,8 +19,9 @@ from ..errors import config_error
 from .checks import (SAFETY_DEFLECTION_RATIO, Check, FlowChart, acceleration_limit, dynamic_analysis_required, phi_2, phi_3,
                      phi_irregularity, verdict)
 from .damping import CodeDamping, achieved_ratios, apply_code_damping, code_damping
+from .interaction import interaction_scan
 from .load_trains import load_train, resonant_speeds
-from .scan import ScanResult, scan_speeds, speed_scan, with_band
+from .scan import ScanResult, scan_speeds, span_points, speed_scan, with_band
 from .settings import BridgeCheck
 from .static import deck_frequencies, influence_line
 
@@ -35,7 +36,9 @@ class TrainEnvelope:
     """One train's result over the scan: ``static`` (its static deflection at the point, m),
     ``dynamic`` (largest dynamic deflection, m) at ``speed`` (m/s), ``phi_dyn`` (φ'dyn =
     dynamic/static − 1, −), ``phi_irr`` (φ'', −, at the line's maximum speed), ``design`` ((1 +
-    φ'dyn + φ''·k)·static, m, k = ½ for carefully maintained track, 1 otherwise)."""
+    φ'dyn + φ''·k)·static, m, k = ½ for carefully maintained track, 1 otherwise), ``x`` (the
+    observation point, m, where the dynamic deflection is largest; the static one is taken
+    there, as is ``lm71``, the static deflection under α·LM71 there, m)."""
 
     train: str
     static: float
@@ -44,6 +47,8 @@ class TrainEnvelope:
     phi_dyn: float
     phi_irr: float
     design: float
+    x: float
+    lm71: float
 
 
 @dataclass
@@ -51,8 +56,11 @@ class Assessment:
     """A finished bridge check. ``settings`` and ``config`` (the damped, banded configuration
     the scan ran); ``n0`` (Hz), ``frequencies`` (the deck's distinct natural frequencies, Hz),
     ``band`` (Hz); ``damping`` (the code's) with its ``achieved`` ratios (−) at ``frequencies``
-    in the band; ``flow_chart``; ``scan``; ``lm71`` (static deflection under α·LM71, m) and
-    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time."""
+    in the band; ``flow_chart``; ``scan``; ``lm71`` (largest static deflection under α·LM71
+    over the observation points, m) and
+    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time;
+    ``interaction``: the scan of ``settings.vehicles`` with full interaction (Table 6.6's
+    damping without Δζ), or None."""
 
     settings: BridgeCheck
     config: Config
@@ -68,6 +76,7 @@ class Assessment:
     envelopes: list
     checks: list = field(default_factory=list)
     seconds: float = 0.0
+    interaction: Optional[ScanResult] = None
 
     @property
     def passed(self) -> Optional[bool]:
@@ -101,6 +110,8 @@ def prepare(config: Config, settings: BridgeCheck) -> tuple:
     band = float(settings.band) if settings.band is not None else deck_band_of(freqs, n0)
     damping = code_damping(settings.bridge_type, settings.span, settings.interaction)
     cfg = apply_code_damping(with_band(config, band), damping, n0, band)
+    if len(cfg.structure.layers) > 1:
+        cfg.output.points = span_points(cfg)  # the deck searched along its length
     cfg.solver.dt = float(settings.dt) if settings.dt is not None else 1.0 / (STEPS_PER_BAND_PERIOD * band)
     if len(cfg.structure.layers) > 1:
         cfg.output.band_limit = None  # the scan records the deck's indices only, low-passed at output.deck_band
@@ -119,27 +130,40 @@ def assess(config: Config, settings: BridgeCheck, out: Union[str, Path, None] = 
     speeds = scan_speeds(settings.v_min, v_max, settings.step, resonances)
     scan = speed_scan(cfg, trains, speeds, band=band, mass_bounds=settings.mass_bounds, share=settings.share, tail=settings.tail,
                       out=None if out is None else Path(out) / "journals", executor=executor, threads=threads, progress=progress)
-    line = influence_line(cfg)
+    lines = {}  # the influence line at each observation point that governs a deflection
+
+    def line_at(x: float):
+        if x not in lines:
+            lines[x] = influence_line(cfg, point=x)
+        return lines[x]
+
+    points = cfg.output.points or [cfg.structure.length / 2]
     l_phi = float(settings.l_phi or settings.span)
     phi = phi_2(l_phi) if settings.maintenance == "careful" else phi_3(l_phi)
-    lm71 = line.lm71(settings.alpha, settings.share)
+    lm71 = max(line_at(float(x)).lm71(settings.alpha, settings.share) for x in points)
     k_irr = 0.5 if settings.maintenance == "careful" else 1.0
     envelopes = []
     for t in trains:
         sel = scan.select(train=t.name)
         ok = np.isfinite(sel["disp"])
-        static = line.train(t, settings.share)
         if not ok.any():
-            envelopes.append(TrainEnvelope(t.name, static, math.nan, math.nan, math.nan, math.nan, math.nan))
+            envelopes.append(TrainEnvelope(t.name, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan))
             continue
         i = int(np.argmax(np.where(ok, sel["disp"], -np.inf)))
+        x = float(sel["disp_x"][i])
+        static = line_at(x).train(t, settings.share)
         phi_dyn = max(0.0, float(sel["disp"][i]) / static - 1.0)
         irr = phi_irregularity(l_phi, n0, settings.line_speed)
         envelopes.append(TrainEnvelope(t.name, static, float(sel["disp"][i]), float(sel["speed"][i]), phi_dyn, irr,
-                                       (1.0 + phi_dyn + k_irr * irr) * static))
+                                       (1.0 + phi_dyn + k_irr * irr) * static, x, line_at(x).lm71(settings.alpha, settings.share)))
     result = Assessment(settings, cfg, n0, freqs, band, damping, achieved,
                         dynamic_analysis_required(settings.span, n0, settings.line_speed, settings.simple_structure, settings.continuous),
                         scan, lm71, phi, envelopes)
+    if settings.vehicles:
+        plain = apply_code_damping(cfg, code_damping(settings.bridge_type, settings.span, False), n0, band)
+        result.interaction = interaction_scan(plain, settings.vehicles, speeds, band=band, mass_bounds=settings.mass_bounds,
+                                              tail=settings.tail, out=None if out is None else Path(out) / "interaction",
+                                              executor=executor, threads=threads, progress=progress)
     result.checks = checks_of(result)
     result.seconds = time.perf_counter() - t0
     return result
@@ -161,12 +185,13 @@ def checks_of(a: Assessment) -> list:
         return out
     gov = a.scan.governing("acc")
     out.append(verdict("deck acceleration", "EN 1990 A2.4.4.2.1(4)P; EN 1991-2 §6.4.6.5", gov["acc"], acceleration_limit(s.track), "m/s²",
-                       f"{gov['train']} ({gov['bound']})", gov["speed"], note=f"in the band up to {a.band:.3g} Hz at the observation point"))
-    worst = max((e for e in a.envelopes if math.isfinite(e.design)), key=lambda e: e.design, default=None)
+                       f"{gov['train']} ({gov['bound']})", gov["speed"], note=f"in the band up to {a.band:.3g} Hz, largest at x = {gov['acc_x']:g} m"))
+    worst = max((e for e in a.envelopes if math.isfinite(e.design)), key=lambda e: e.design / e.lm71, default=None)
     limit = a.phi * a.lm71
     if worst is not None:
-        out.append(verdict("dynamic envelope within Φ·LM71", "EN 1991-2 §6.4.6.5(3), eq. (6.15)", worst.design, limit, "m", worst.train, worst.speed,
-                           note="deflection at the observation point; where it exceeds Φ·α·LM71 the dynamic envelope governs the design"))
+        out.append(verdict("dynamic envelope within Φ·LM71", "EN 1991-2 §6.4.6.5(3), eq. (6.15)", worst.design, a.phi * worst.lm71, "m", worst.train,
+                           worst.speed, note=f"deflection at x = {worst.x:g} m, where the train's dynamic deflection is largest; where it "
+                           "exceeds Φ·α·LM71 the dynamic envelope governs the design"))
     out.append(verdict("deck deflection, traffic safety", "EN 1990 A2.4.4.2.3(1)", limit, s.span / SAFETY_DEFLECTION_RATIO, "m", "LM71 × Φ × α",
                        note="δ ≤ L/600"))
     if s.comfort_ratio is not None:

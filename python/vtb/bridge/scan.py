@@ -6,7 +6,10 @@ the deck's mass, as a study of vtb (journaled, resumable, on any executor).
 v_i = n0·D/i of each train that falls in the range (§6.4.6.2(3): the peak responses at the
 resonant speeds must be found). :func:`speed_scan` runs them: one :func:`vtb.study` per train
 and mass bound, over the speed, reporting the deck's peak acceleration in the check's band and
-its peak deflection at the configuration's first observation point.
+its peak deflection. With a deck under a track (several layers) and several observation points
+the deck is observed at each (the core's ``deck_acc_max_p{j}``, ``deck_disp_max_p{j}``) and the
+largest governs: :func:`span_points` puts them at the quarter, middle and three-quarter point of
+every span.
 """
 
 from __future__ import annotations
@@ -30,6 +33,10 @@ from .load_trains import LoadTrain, apply_load_train, load_train
 MAX_STEP = 10.0 / 3.6
 #: The deck's indices a scan records: (acceleration in the band, deflection), per layer count.
 DECK_INDICES = ("deck_acc_max", "deck_disp_max")
+#: The deck's indices at observation point j (the core's catalogue).
+POINT_INDICES = ("deck_acc_max_p{j}", "deck_disp_max_p{j}")
+#: Where :func:`span_points` observes each span, as fractions of its length.
+SPAN_FRACTIONS = (0.25, 0.5, 0.75)
 
 
 def _positive(name: str, v) -> float:
@@ -71,6 +78,33 @@ def deck_indices(config: Config) -> tuple:
     return (f"{name}_acc_max", f"{name}_disp_max")
 
 
+def point_indices(config: Config) -> Optional[tuple]:
+    """The (acceleration, deflection) index names of the deck at every observation point of
+    ``config`` (two lists), or None when it has one point or a single layer."""
+    n = len(config.output.points)
+    if len(config.structure.layers) < 2 or n < 2:
+        return None
+    return tuple([p.replace("{j}", str(j)) for j in range(n)] for p in POINT_INDICES)
+
+
+def span_points(config: Config) -> list:
+    """The quarter, middle and three-quarter points (m) of every span of ``config``'s deck (its
+    bottom layer): the deck is cut at its ``joints`` into girders, and each girder spans between
+    its supports (discrete couplings to the ground) in it — the whole girder without two."""
+    deck = config.structure.layers[-1]
+    length = float(config.structure.length)
+    cuts = [0.0] + sorted(float(j) for j in deck.joints) + [length]
+    supports = sorted(float(x) for c in config.structure.couplings if c.upper == deck.name and c.lower == "ground"
+                      and c.kind == "discrete" for x in c.positions)
+    out = []
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        inside = [x for x in supports if a <= x <= b]
+        ends = inside if len(inside) >= 2 else [a, b]
+        for lo, hi in zip(ends[:-1], ends[1:]):
+            out += [lo + f * (hi - lo) for f in SPAN_FRACTIONS]
+    return out
+
+
 def with_band(config: Config, band: float) -> Config:
     """``config`` whose deck acceleration is low-passed at ``band`` (Hz): ``output.deck_band``,
     and for a single layer ``output.band_limit`` too."""
@@ -89,13 +123,19 @@ def with_mass(config: Config, factor: float) -> Config:
     return out
 
 
+#: A scan's columns, and those of them that are numbers.
+COLUMNS = ("train", "bound", "speed", "acc", "disp", "acc_x", "disp_x", "error")
+NUMBERS = ("speed", "acc", "disp", "acc_x", "disp_x")
+
+
 @dataclass
 class ScanResult:
     """A finished scan. ``columns``: numpy arrays ``train`` (name), ``bound`` (the mass bound's
     name), ``speed`` (m/s), ``acc`` (the deck's peak acceleration in the check's band, m/s²),
-    ``disp`` (its peak deflection, m, static part included), ``error`` (empty, or why the run
-    failed). ``indices``: the run indices ``acc`` and ``disp`` were read from; ``journals``:
-    the study journal of each (train, bound)."""
+    ``disp`` (its peak deflection, m, static part included), ``acc_x`` and ``disp_x`` (the
+    observation point, m, where each peak was found), ``error`` (empty, or why the run
+    failed). ``indices``: the run indices ``acc`` and ``disp`` were read from (two lists, one
+    name per observation point); ``journals``: the study journal of each (train, bound)."""
 
     columns: dict
     indices: tuple
@@ -125,16 +165,15 @@ class ScanResult:
 
     def to_pandas(self):
         """The columns as a DataFrame (units in ``attrs["units"]``; needs pandas)."""
-        return frame(self.columns, {"speed": "m/s", "acc": "m/s²", "disp": "m"})
+        return frame(self.columns, {"speed": "m/s", "acc": "m/s²", "disp": "m", "acc_x": "m", "disp_x": "m"})
 
     def to_csv(self, path) -> None:
         """CSV of the columns (numbers by ``repr``: exact round trip)."""
-        cols = ("train", "bound", "speed", "acc", "disp", "error")
         with open(path, "w", newline="") as f:
             w = csv.writer(f, lineterminator="\n")
-            w.writerow(cols)
-            for r in zip(*(self.columns[c] for c in cols)):
-                w.writerow([repr(float(v)) if k in ("speed", "acc", "disp") else str(v) for k, v in zip(cols, r)])
+            w.writerow(COLUMNS)
+            for r in zip(*(self.columns[c] for c in COLUMNS)):
+                w.writerow([repr(float(v)) if k in NUMBERS else str(v) for k, v in zip(COLUMNS, r)])
 
     def to_parquet(self, path) -> None:
         to_parquet(self.to_pandas(), path)
@@ -166,29 +205,47 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     if not bounds:
         raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
     base = with_band(config, band if band is not None else config.output.deck_band)
-    acc, disp = deck_indices(base)
     directory = Path(out) if out is not None else None
-    if directory is not None:
-        make_folder(directory, "out")
-    cols = {k: [] for k in ("train", "bound", "speed", "acc", "disp", "error")}
-    journals = {}
+    runs = []
     for bound, factor in bounds.items():
         massed = with_mass(base, factor)
         for t in loads:
-            cfg = apply_load_train(massed, t, share=share, tail=tail, gap=gap)
-            journal = directory / f"{_file_name(t.name)}__{_file_name(bound)}.csv" if directory is not None else None
-            res = study(cfg, cases=[{"speed": v} for v in grid], indices=[acc, disp], out=journal, executor=executor,
-                        threads=threads, progress=progress, desc=f"{t.name} ({bound})")
-            journals[(t.name, bound)] = None if journal is None else str(journal)
-            n = len(res)
-            cols["train"] += [t.name] * n
-            cols["bound"] += [bound] * n
-            cols["speed"] += list(res.columns["speed"])
-            cols["acc"] += list(res.columns[acc])
-            cols["disp"] += list(res.columns[disp])
-            cols["error"] += list(res.columns["error"])
-    columns = {k: np.asarray(v, dtype=float if k in ("speed", "acc", "disp") else str) for k, v in cols.items()}
-    return ScanResult(columns, (acc, disp), journals)
+            runs.append((t.name, bound, apply_load_train(massed, t, share=share, tail=tail, gap=gap)))
+    return run_scan(runs, grid, directory, executor=executor, threads=threads, progress=progress)
+
+
+def run_scan(runs: Sequence[tuple], speeds: Sequence[float], directory: Optional[Path], executor: Optional[Executor] = None,
+             threads: Optional[int] = None, progress: bool = True) -> ScanResult:
+    """Runs each (train name, bound name, configuration) of ``runs`` as one :func:`vtb.study`
+    over ``speeds`` (m/s), journaled in ``directory`` (``{train}__{bound}.csv``; None: not
+    journaled), and gathers the deck's peaks into a :class:`ScanResult`."""
+    if directory is not None:
+        make_folder(directory, "out")
+    cols = {k: [] for k in COLUMNS}
+    journals = {}
+    names = None
+    for train, bound, cfg in runs:
+        per_point = point_indices(cfg)
+        acc, disp = per_point if per_point is not None else ([i] for i in deck_indices(cfg))
+        names = (acc, disp)
+        xs = np.asarray(cfg.output.points or [cfg.structure.length / 2], dtype=float)
+        journal = directory / f"{_file_name(train)}__{_file_name(bound)}.csv" if directory is not None else None
+        res = study(cfg, cases=[{"speed": v} for v in speeds], indices=acc + disp, out=journal, executor=executor,
+                    threads=threads, progress=progress, desc=f"{train} ({bound})")
+        journals[(train, bound)] = None if journal is None else str(journal)
+        n = len(res)
+        cols["train"] += [train] * n
+        cols["bound"] += [bound] * n
+        cols["speed"] += list(res.columns["speed"])
+        cols["error"] += list(res.columns["error"])
+        for key, which in (("acc", acc), ("disp", disp)):
+            table = np.column_stack([np.asarray(res.columns[i], dtype=float) for i in which])
+            ok = np.isfinite(table).any(axis=1)
+            j = np.argmax(np.where(np.isfinite(table), table, -np.inf), axis=1)
+            cols[key] += list(np.where(ok, table[np.arange(n), j], np.nan))
+            cols[key + "_x"] += list(np.where(ok, xs[j], np.nan))
+    columns = {k: np.asarray(v, dtype=float if k in NUMBERS else str) for k, v in cols.items()}
+    return ScanResult(columns, names, journals)
 
 
 def _file_name(text: str) -> str:

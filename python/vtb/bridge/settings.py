@@ -13,6 +13,7 @@ from typing import Optional, Union
 
 from ..config.fields import Config
 from ..config.schema import StrictFields
+from ..config.trains import trains as library_trains
 from ..errors import config_error
 from .checks import ACCELERATION_LIMITS
 from .damping import BRIDGE_TYPES
@@ -54,6 +55,11 @@ class BridgeCheck(StrictFields):
         upper = 1.15}`` for the ballast's least and greatest density and depth).
     interaction
         Add Δζ (eq. 6.13) to Table 6.6's damping (moving loads stand in for the vehicles).
+    vehicles
+        Beyond the code: library trains (:func:`vtb.trains`) run as vehicles with full
+        interaction over the same speeds, on a smooth rail, with Table 6.6's damping without
+        Δζ (:func:`vtb.bridge.interaction.interaction_scan`), reported beside the moving loads
+        (add the same names to ``trains`` to compare train by train). Default: none.
     n0
         The deck's first bending frequency (Hz); default: computed from the structure.
     band
@@ -86,6 +92,7 @@ class BridgeCheck(StrictFields):
     trains: list = field(default_factory=lambda: list(HSLM_ALL))
     mass_bounds: dict = field(default_factory=lambda: {"nominal": 1.0})
     interaction: bool = True
+    vehicles: list = field(default_factory=list)
     n0: Optional[float] = None
     band: Optional[float] = None
     share: float = 1.0
@@ -120,6 +127,9 @@ class BridgeCheck(StrictFields):
             raise config_error("bridge_check.v_min", self.v_min, f"must lie below 1.2 × line_speed = {1.2 * self.line_speed:g} m/s")
         if not isinstance(self.trains, (list, tuple)) or not self.trains or not all(isinstance(t, str) for t in self.trains):
             raise config_error("bridge_check.trains", self.trains, "must be a non-empty list of train names or CSV paths")
+        known = library_trains()
+        if not isinstance(self.vehicles, (list, tuple)) or not all(isinstance(t, str) and t in known for t in self.vehicles):
+            raise config_error("bridge_check.vehicles", self.vehicles, f"must be a list of the library's trains ({', '.join(sorted(known))})")
         if not isinstance(self.mass_bounds, dict) or not self.mass_bounds:
             raise config_error("bridge_check.mass_bounds", self.mass_bounds, "must be a table name → factor on the deck's density")
         for k, v in self.mass_bounds.items():

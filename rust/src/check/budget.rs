@@ -48,10 +48,7 @@ pub fn model_bytes(cfg: &Config) -> f64 {
 pub fn history_bytes(cfg: &Config, record: Record) -> f64 {
     let steps = cfg.n_steps() as f64 + 1.0;
     let layers = record.layers(cfg).len() as f64;
-    let points = match record {
-        Record::Full => cfg.observation_points().len() as f64,
-        Record::Metrics => 1.0,
-    };
+    let points = record.points(cfg).len() as f64;
     let cars = cfg.vehicles.len() as f64;
     let vehicle = match record {
         Record::Full => cars * 10.0,

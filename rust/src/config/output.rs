@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputConfig {
-    /// Observation points (m); empty means x = L/2. Metrics use the first point.
+    /// Observation points (m); empty means x = L/2. The indices of a layer are taken at the
+    /// first point; with more than one point, the deck's `deck_acc_max_p{j}` and
+    /// `deck_disp_max_p{j}` at every point j.
     #[serde(default)]
     pub points: Vec<f64>,
     /// Analysis window [t0, t1] (s) of the metrics: maxima, r.m.s., contact-force extremes and

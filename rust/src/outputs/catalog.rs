@@ -18,6 +18,8 @@ pub enum Subject {
     LayerBand,
     /// The bottom layer (the deck) at the first observation point.
     Deck,
+    /// The deck at observation point `{j}` (the point's index).
+    DeckPoint,
     /// The first car's body.
     Car,
     /// The body of a car after the first (`{k}` ≥ 1).
@@ -36,6 +38,7 @@ impl Subject {
             Subject::Layer => "layer",
             Subject::LayerBand => "layer band",
             Subject::Deck => "deck",
+            Subject::DeckPoint => "deck point",
             Subject::Car => "car",
             Subject::OtherCar => "car k",
             Subject::Wheels => "wheels",
@@ -96,6 +99,10 @@ fn band_levels(c: &Config) -> bool {
 fn deck(c: &Config) -> bool {
     c.structure.layers.len() > 1
 }
+/// A deck observed at more than one point (at one, `deck_acc_max` and `deck_disp_max` are it).
+fn deck_points(c: &Config) -> bool {
+    deck(c) && c.observation_points().len() > 1
+}
 fn vehicles(c: &Config) -> bool {
     !c.vehicles.is_empty()
 }
@@ -108,6 +115,9 @@ fn pads(c: &Config) -> bool {
 
 /// The deck acceleration of EN 1990 A2: the bottom layer's, low-passed at `output.deck_band`.
 pub const DECK: &str = "deck_acc_max";
+/// The deck's acceleration (as [`DECK`]) and displacement at observation point `{j}`.
+pub const DECK_ACC_POINT: &str = "deck_acc_max_p{j}";
+pub const DECK_DISP_POINT: &str = "deck_disp_max_p{j}";
 
 /// Every kind of index, in the order `index_names` lists them (a layer's all together).
 pub const CATALOG: &[IndexKind] = &[
@@ -183,6 +193,24 @@ pub const CATALOG: &[IndexKind] = &[
         description: "peak |displacement| of the bottom layer (static deflection included): the \
                       deck's deflection for EN 1990 A2.4.4.3",
         present: deck,
+    },
+    IndexKind {
+        pattern: DECK_ACC_POINT,
+        unit: "m/s²",
+        subject: Subject::DeckPoint,
+        band: Band::Deck,
+        description: "peak |acceleration| of the bottom layer at observation point j in the deck band: \
+                      the deck's acceleration searched along it (the largest over j governs)",
+        present: deck_points,
+    },
+    IndexKind {
+        pattern: DECK_DISP_POINT,
+        unit: "m",
+        subject: Subject::DeckPoint,
+        band: Band::Raw,
+        description: "peak |displacement| of the bottom layer at observation point j (static \
+                      deflection included)",
+        present: deck_points,
     },
     IndexKind {
         pattern: "car_disp_max",
@@ -292,7 +320,7 @@ impl IndexKind {
             Subject::Wheel => (0..cfg.vehicles.iter().map(|v| v.n_wheels()).sum::<usize>())
                 .map(|w| p.replace("{w}", &w.to_string()))
                 .collect(),
-            Subject::Pad => (0..cfg.observation_points().len())
+            Subject::Pad | Subject::DeckPoint => (0..cfg.observation_points().len())
                 .map(|j| p.replace("{j}", &j.to_string()))
                 .collect(),
         }
@@ -379,11 +407,29 @@ pub fn index_layers(cfg: &Config) -> Vec<usize> {
                 names.iter().any(|n| {
                     layer_of_index(n, &layers[li].name)
                         || (li + 1 == layers.len()
-                            && kind_of(cfg, n).is_some_and(|k| k.subject == Subject::Deck))
+                            && kind_of(cfg, n).is_some_and(|k| {
+                                matches!(k.subject, Subject::Deck | Subject::DeckPoint)
+                            }))
                 })
             })
             .collect(),
     }
+}
+
+/// Whether a run's metrics read every observation point (a per-point deck index is reported:
+/// `output.indices` names one, or is empty and the structure has a deck), not only the first.
+pub fn every_point(cfg: &Config) -> bool {
+    let per_point = |n: &str| kind_of(cfg, n).is_some_and(|k| k.subject == Subject::DeckPoint);
+    cfg.observation_points().len() > 1
+        && match &cfg.output.indices {
+            None => deck(cfg),
+            Some(names) => names.iter().any(|n| per_point(n)),
+        }
+}
+
+/// The name of a per-point index `pattern` (`{j}`) at observation point `j`.
+pub fn point_index(pattern: &str, j: usize) -> String {
+    pattern.replace("{j}", &j.to_string())
 }
 
 /// A rail fastener (pad) whose force a run records: a point spring ∥ dashpot between the top
@@ -479,19 +525,28 @@ mod tests {
             "pad0_force_range",
             "pad1_force_range",
             DECK,
+            "deck_acc_max_p1",
+            "deck_disp_max_p0",
         ] {
             assert!(names.iter().any(|k| k == n), "{n}");
         }
-        assert!(
-            !names.iter().any(|k| k == "car2_comfort_aw"
-                || k == "wheel8_force_max"
-                || k == "pad2_force_range")
-        );
+        assert!(!names.iter().any(|k| k == "car2_comfort_aw"
+            || k == "wheel8_force_max"
+            || k == "pad2_force_range"
+            || k == "deck_acc_max_p2"));
+        assert!(every_point(&cfg), "every index asked: every point recorded");
         assert!(kind_of(&cfg, "rail_acc_rms").is_some_and(|k| k.unit == "m/s²"));
         assert!(kind_of(&cfg, "pad1_force_range").is_some_and(|k| k.unit == "N"));
         assert!(kind_of(&cfg, "rail_acc_L1000").is_none());
         cfg.output.indices = Some(vec![DECK.into()]);
         assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
+        assert!(
+            !every_point(&cfg),
+            "the first point's deck index: the first point only"
+        );
+        cfg.output.indices = Some(vec!["deck_disp_max_p1".into()]);
+        assert_eq!(index_layers(&cfg), vec![cfg.structure.layers.len() - 1]);
+        assert!(every_point(&cfg));
         cfg.structure.layers.truncate(1);
         assert!(!index_names(&cfg).iter().any(|k| k == DECK));
     }

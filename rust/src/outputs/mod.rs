@@ -11,7 +11,7 @@ pub use catalog::{DECK, index_layers, index_names, layer_of_index};
 
 use crate::config::Config;
 use crate::model::structure::Structure;
-use catalog::{band_index, car_comfort, layer_index};
+use catalog::{DECK_ACC_POINT, DECK_DISP_POINT, band_index, car_comfort, layer_index, point_index};
 use filter::low_pass;
 use indices::{amplitude, rms, settle_time};
 use std::collections::BTreeMap;
@@ -26,7 +26,8 @@ pub struct ContactLoss {
 }
 
 /// What a run keeps: everything, or only the series its metrics are computed from (the layers
-/// its indices need, `catalog::index_layers`, at the first observation point; the first car
+/// its indices need, `catalog::index_layers`, at the first observation point, or at every one
+/// when a per-point deck index is reported, `catalog::every_point`; the first car
 /// body's bounce; the contact forces): the batch of a study never holds the full histories of
 /// all its jobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +42,15 @@ impl Record {
         match self {
             Record::Full => (0..cfg.structure.layers.len()).collect(),
             Record::Metrics => index_layers(cfg),
+        }
+    }
+
+    /// The observation points (m) a run records.
+    pub fn points(self, cfg: &Config) -> Vec<f64> {
+        let all = cfg.observation_points();
+        match self {
+            Record::Metrics if !catalog::every_point(cfg) => all[..1].to_vec(),
+            _ => all,
         }
     }
 }
@@ -172,6 +182,7 @@ impl RunResult {
     /// comfort `car_comfort_aw` (ISO 2631-1 a_w of the raw record, at sampling rates ≥ 400 Hz),
     /// and each further car's `car{k}_comfort_aw`; the deck acceleration `deck_acc_max` (the
     /// bottom layer's, low-passed at `output.deck_band`, EN 1990 A2); `contact_force_max`,
+    /// and at each observation point j (recorded) `deck_acc_max_p{j}` and `deck_disp_max_p{j}`;
     /// `contact_force_min`, `contact_loss_events` over all wheels and each wheel's
     /// `wheel{w}_force_max`, `wheel{w}_force_min`; with `output.pad_forces`, the force range
     /// `pad{j}_force_range` of the rail fastener nearest each observation point j. The
@@ -202,6 +213,7 @@ impl RunResult {
             let u = &self.layer_disp(d, 0)[steps.clone()];
             m.insert("deck_disp_max".to_string(), amplitude(u));
         }
+        self.deck_point_metrics(&steps, &mut m);
         self.contact_metrics(&steps, &mut m);
         for j in 0..self.n_pads {
             let f = &Self::column(&self.pad_force, self.n_pads, j)[steps.clone()];
@@ -212,6 +224,25 @@ impl RunResult {
             m.retain(|k, _| keep.contains(k));
         }
         m
+    }
+
+    /// The deck's peak acceleration (in the deck band) and displacement at every recorded
+    /// observation point, when more than one is recorded.
+    fn deck_point_metrics(&self, steps: &Steps, m: &mut BTreeMap<String, f64>) {
+        let Some(d) = self.deck.filter(|_| self.points.len() > 1) else {
+            return;
+        };
+        for j in 0..self.points.len() {
+            let acc = point_index(DECK_ACC_POINT, j);
+            if self.wants(&acc) {
+                let a = low_pass(&self.layer_acc(d, j), self.deck_band, self.dt);
+                m.insert(acc, amplitude(&a[steps.clone()]));
+            }
+            let disp = point_index(DECK_DISP_POINT, j);
+            if self.wants(&disp) {
+                m.insert(disp, amplitude(&self.layer_disp(d, j)[steps.clone()]));
+            }
+        }
     }
 
     /// A record low-passed at the band limit (as it is without one).

@@ -80,10 +80,7 @@ impl<'m, const W: usize> Simulation<'m, W> {
     pub fn lanes(model: &'m Model, lanes: &[LaneSpec<'m>], record: Record) -> Result<Self> {
         assert_eq!(lanes.len(), W, "one lane spec per lane");
         let cfg = &model.cfg;
-        let points = match record {
-            Record::Full => cfg.observation_points(),
-            Record::Metrics => cfg.observation_points()[..1].to_vec(),
-        };
+        let points = record.points(cfg);
         let side = NewmarkSide::new(model, lanes, record, &points)?;
         let vehicles = Vehicles::new(model, cfg.solver.dt)?;
         Ok(Self {

@@ -63,10 +63,7 @@ pub fn run_lanes<const W: usize>(
 ) -> Result<Vec<Result<RunResult>>> {
     assert_eq!(specs.len(), W, "one lane spec per lane");
     let cfg = &model.cfg;
-    let points = match record {
-        Record::Full => cfg.observation_points(),
-        Record::Metrics => cfg.observation_points()[..1].to_vec(),
-    };
+    let points = record.points(cfg);
     fits(model, specs, red)?;
     crate::check::budget::check_histories(cfg, record, W)?;
     let v = Vehicles::<W>::new(model, cfg.solver.dt)?;
