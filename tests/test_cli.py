@@ -63,7 +63,7 @@ def test_reproduce_quick(tmp_path):
     journal = next(out.glob("optimisation_warm_*.designs.jsonl"))
     identity, *rest = journal.read_text().splitlines()
     stamped = json.loads(identity)
-    stamped["vtb.optimize"]["config"]["speed"] += 1.0
+    stamped["identity"]["vtb.optimize"]["config"]["speed"] += 1.0
     journal.write_text("\n".join([json.dumps(stamped), *rest]) + "\n")
     sweep = (out / "sweep.csv").read_text()
     assert cli.main(["reproduce", "--out", str(out), "--quick", "--no-progress", "--force"]) == 0

@@ -19,14 +19,12 @@ from concurrent.futures import Executor
 from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
 
-import numpy as np
-
 from ..config.fields import Config
 from ..config.irregularity import Irregularity
 from ..config.trains import train as library_train
 from ..config.trains import trains as library_trains
 from ..errors import config_error
-from .scan import ScanResult, _positive, run_scan, with_band, with_mass
+from .scan import ScanResult, _positive, run_scan, scan_inputs, with_mass
 
 
 def with_vehicles(config: Config, name: str, gap: float = 1.0, tail: float = 0.5, cars: Optional[int] = None,
@@ -61,14 +59,7 @@ def interaction_scan(config: Config, trains: Sequence[str], speeds: Sequence[flo
     names = list(trains)
     if not names:
         raise config_error("trains", trains, "needs at least one train of the library")
-    grid = [float(v) for v in np.atleast_1d(np.asarray(speeds, dtype=float))]
-    for i, v in enumerate(grid):
-        _positive(f"speeds[{i}]", v)
-    bounds = dict(mass_bounds or {"nominal": 1.0})
-    if not bounds:
-        raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
-    base = with_band(config, band if band is not None else config.output.deck_band)
-    directory = Path(out) if out is not None else None
+    grid, bounds, base, directory = scan_inputs(config, speeds, mass_bounds, band, out)
     runs = [(name, bound, with_vehicles(with_mass(base, factor), name, gap, tail, cars, irregularity))
             for bound, factor in bounds.items() for name in names]
     return run_scan(runs, grid, directory, executor=executor, threads=threads, progress=progress)

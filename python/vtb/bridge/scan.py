@@ -198,6 +198,19 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     loads = [load_train(t) for t in trains]
     if not loads:
         raise config_error("trains", trains, "needs at least one load train")
+    grid, bounds, base, directory = scan_inputs(config, speeds, mass_bounds, band, out)
+    runs = []
+    for bound, factor in bounds.items():
+        massed = with_mass(base, factor)
+        for t in loads:
+            runs.append((t.name, bound, apply_load_train(massed, t, share=share, tail=tail, gap=gap)))
+    return run_scan(runs, grid, directory, executor=executor, threads=threads, progress=progress)
+
+
+def scan_inputs(config: Config, speeds, mass_bounds, band, out) -> tuple:
+    """A scan's checked inputs: the speeds (m/s, each positive), the mass bounds (default
+    ``{"nominal": 1.0}``), the configuration low-passed at ``band`` (default its deck band) and
+    the journals' directory (or None)."""
     grid = [float(v) for v in np.atleast_1d(np.asarray(speeds, dtype=float))]
     for i, v in enumerate(grid):
         _positive(f"speeds[{i}]", v)
@@ -205,13 +218,7 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     if not bounds:
         raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
     base = with_band(config, band if band is not None else config.output.deck_band)
-    directory = Path(out) if out is not None else None
-    runs = []
-    for bound, factor in bounds.items():
-        massed = with_mass(base, factor)
-        for t in loads:
-            runs.append((t.name, bound, apply_load_train(massed, t, share=share, tail=tail, gap=gap)))
-    return run_scan(runs, grid, directory, executor=executor, threads=threads, progress=progress)
+    return grid, bounds, base, Path(out) if out is not None else None
 
 
 def run_scan(runs: Sequence[tuple], speeds: Sequence[float], directory: Optional[Path], executor: Optional[Executor] = None,
