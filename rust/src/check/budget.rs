@@ -134,7 +134,7 @@ pub fn check_histories(cfg: &Config, record: Record, lanes: usize) -> Result<()>
     if bytes <= budget {
         return Ok(());
     }
-    let field = if record == Record::Full && cfg.output.points.len() > 1 {
+    let field = if record.points(cfg).len() > 1 {
         "output.points"
     } else {
         "solver.t_end"
