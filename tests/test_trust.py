@@ -350,3 +350,14 @@ def test_vtb_simulate_refuses_a_mistyped_folder_tree_in_one_line(tmp_path, capsy
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "parent folder" in err and "--out" in err and not (tmp_path / "typo").exists()
     assert cli.main(["simulate", "--config", _tiny_toml(tmp_path), "--out", str(tmp_path / "results"), "--no-plot"]) == 0
+
+
+def test_a_section_given_as_a_table_is_refused_naming_it():
+    """A table (dict) in place of a section reached the core, which read it with defaults,
+    while the Python checks met an AttributeError (the fuzzer's find)."""
+    for section in ("discretisation", "solver", "output", "structure"):
+        cfg = small_config()
+        setattr(cfg, section, {})
+        with pytest.raises(ConfigError) as e:
+            vtb.simulate(cfg, progress=False)
+        assert e.value.field == section

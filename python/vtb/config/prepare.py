@@ -9,10 +9,12 @@ once, when it runs the configuration; :meth:`vtb.Config.validate` asks it now.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
 import threading
+import typing
 import warnings
 from collections import OrderedDict
 from typing import NamedTuple, Optional
@@ -51,6 +53,7 @@ def prepare(cfg: Config, full: bool = False) -> tuple[str, SampledProfile]:
     full histories)."""
     if not isinstance(cfg, Config):
         raise config_error("config", type(cfg).__name__, "expected a vtb.Config")
+    _check_sections(cfg)
     text = cfg.to_core_json()
     # A unit mistake (a speed in km/h) is named before the irregularity's checks it would trip.
     gateway.check_plausible(text)
@@ -67,6 +70,16 @@ def prepare(cfg: Config, full: bool = False) -> tuple[str, SampledProfile]:
     # budget) answers in microseconds: before the profile, which may take seconds to draw.
     gateway.validate(text, full=full)
     return text, irregularity_profile(cfg, text)
+
+
+def _check_sections(cfg: Config) -> None:
+    """Each section of ``cfg`` (``structure``, ``discretisation``, ``solver``, ...) is its
+    dataclass: a table put in its place would reach the core but not the Python checks."""
+    hints = typing.get_type_hints(Config)
+    for f in dataclasses.fields(cfg):
+        kind, value = hints[f.name], getattr(cfg, f.name)
+        if dataclasses.is_dataclass(kind) and not isinstance(value, kind):
+            raise config_error(f.name, value, f"expected a vtb.{kind.__name__} (Config.from_dict reads a table)")
 
 
 def _rolled_extent(cfg: Config, text: str) -> Optional[tuple]:
