@@ -96,8 +96,14 @@ def test_report_of_a_small_bridge(tmp_path):
     assert a.damping.ratio == pytest.approx((1.0 + 0.296) / 100, abs=5e-6)
     assert a.band == pytest.approx(9 * N0, rel=1e-3) and a.n0 == pytest.approx(N0, rel=1e-4)
     for e in a.envelopes:
-        assert e.static == pytest.approx(influence_line(a.config).train(load_train(e.train)))
-        assert e.phi_dyn == pytest.approx(max(0.0, e.dynamic / e.static - 1))
+        for r, quantity in ((e.deflection, "deflection"), (e.moment, "moment")):
+            assert r.static == pytest.approx(influence_line(a.config, quantity=quantity).train(load_train(e.train)))
+            assert r.phi_dyn == pytest.approx(max(0.0, r.dynamic / r.static - 1))
+        # both reported, the larger governs (EN 1991-2 §6.4.6.5(3)) and enters both envelopes
+        assert e.phi_dyn == max(e.deflection.phi_dyn, e.moment.phi_dyn)
+        assert e.moment.design == pytest.approx((1 + e.phi_dyn + 0.5 * e.phi_irr) * e.moment.static)
+    assert "φ'dyn, M" in text and "bending moment" in text and (tmp_path / "check" / "moment.png").is_file()
+    assert {c.name for c in a.checks} >= {"dynamic envelope within Φ·LM71, deflection", "dynamic envelope within Φ·LM71, bending moment"}
     # HSLM-A1's resonance n0·D = 72 m/s (259 km/h) lies in range: scanned at it, 5 times finer around it
     v = a.scan.select(train="HSLM-A1")["speed"]
     at = np.argmin(np.abs(v - N0 * 18.0))

@@ -100,9 +100,11 @@ def checked_frequencies(value, field_name: str = "frequencies") -> np.ndarray:
     return a
 
 
-def shape_matrix(system: System, layer: int, xs: np.ndarray) -> sp.csc_matrix:
-    """The n × len(xs) sparse matrix whose column i is layer ``layer``'s shape vector at xs[i]."""
-    starts, values = _core.shapes(system.json, layer, np.ascontiguousarray(xs, dtype=float))
+def shape_matrix(system: System, layer: int, xs: np.ndarray, moment: bool = False) -> sp.csc_matrix:
+    """The n × len(xs) sparse matrix whose column i is layer ``layer``'s shape vector at xs[i]
+    (with ``moment``: its bending-moment vector, N·m per unit DOF, sagging positive, as the
+    core's ``deck_moment_max`` reads it)."""
+    starts, values = _core.shapes(system.json, layer, np.ascontiguousarray(xs, dtype=float), moment)
     starts = np.asarray(starts, dtype=np.int64)
     values = np.asarray(values, dtype=float)
     p, width = values.shape

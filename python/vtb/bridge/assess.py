@@ -23,7 +23,7 @@ from .interaction import interaction_scan
 from .load_trains import load_train, resonant_speeds
 from .scan import ScanResult, scan_speeds, span_points, speed_scan, with_band
 from .settings import BridgeCheck
-from .static import deck_frequencies, influence_line
+from .static import QUANTITIES, deck_frequencies, influence_line
 
 #: Resonance orders i of v_i = n0·D/i the scan refines around.
 ORDERS = range(1, 6)
@@ -32,23 +32,41 @@ STEPS_PER_BAND_PERIOD = 100
 
 
 @dataclass
-class TrainEnvelope:
-    """One train's result over the scan: ``static`` (its static deflection at the point, m),
-    ``dynamic`` (largest dynamic deflection, m) at ``speed`` (m/s), ``phi_dyn`` (φ'dyn =
-    dynamic/static − 1, −), ``phi_irr`` (φ'', −, at the line's maximum speed), ``design`` ((1 +
-    φ'dyn + φ''·k)·static, m, k = ½ for carefully maintained track, 1 otherwise), ``x`` (the
-    observation point, m, where the dynamic deflection is largest; the static one is taken
-    there, as is ``lm71``, the static deflection under α·LM71 there, m)."""
+class Response:
+    """One effect of one train over the scan, deflection (m) or mid-span bending moment (N·m):
+    ``static`` (the train's static effect at the point), ``dynamic`` (the largest dynamic one)
+    at ``speed`` (m/s), ``phi_dyn`` (dynamic/static − 1, at least 0), ``x`` (the observation
+    point, m, where the dynamic effect is largest; the static ones are taken there), ``lm71``
+    (the static effect of α·LM71 there) and ``design`` ((1 + φ'dyn + k·φ'')·static with the
+    train's governing φ'dyn, :attr:`TrainEnvelope.phi_dyn`)."""
 
-    train: str
     static: float
     dynamic: float
     speed: float
     phi_dyn: float
-    phi_irr: float
-    design: float
     x: float
     lm71: float
+    design: float = math.nan
+
+
+@dataclass
+class TrainEnvelope:
+    """One train's result over the scan, EN 1991-2 §6.4.6.5(3): ``deflection`` and ``moment``
+    (each a :class:`Response`), ``phi_dyn`` (φ'dyn, −: the larger of the two responses', which
+    governs), ``phi_irr`` (φ'', −, at the line's maximum speed) and ``k_irr`` (k = ½ for
+    carefully maintained track, 1 otherwise); each response's ``design`` is (1 + φ'dyn +
+    k·φ'')·static."""
+
+    train: str
+    deflection: Response
+    moment: Response
+    phi_dyn: float
+    phi_irr: float
+    k_irr: float
+
+    def __post_init__(self):
+        for r in (self.deflection, self.moment):
+            r.design = (1.0 + self.phi_dyn + self.k_irr * self.phi_irr) * r.static
 
 
 @dataclass
@@ -57,8 +75,8 @@ class Assessment:
     the scan ran); ``n0`` (Hz), ``frequencies`` (the deck's distinct natural frequencies, Hz),
     ``band`` (Hz); ``damping`` (the code's) with its ``achieved`` ratios (−) at ``frequencies``
     in the band; ``flow_chart``; ``scan``; ``lm71`` (largest static deflection under α·LM71
-    over the observation points, m) and
-    ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time;
+    over the observation points, m), ``lm71_moment`` (largest static bending moment under
+    α·LM71 over them, N·m) and ``phi`` (Φ, −); ``envelopes`` per train; ``checks``; ``seconds`` of run time;
     ``interaction``: the scan of ``settings.vehicles`` with full interaction (Table 6.6's
     damping without Δζ), or None."""
 
@@ -72,6 +90,7 @@ class Assessment:
     flow_chart: FlowChart
     scan: ScanResult
     lm71: float
+    lm71_moment: float
     phi: float
     envelopes: list
     checks: list = field(default_factory=list)
@@ -130,35 +149,28 @@ def assess(config: Config, settings: BridgeCheck, out: Union[str, Path, None] = 
     speeds = scan_speeds(settings.v_min, v_max, settings.step, resonances)
     scan = speed_scan(cfg, trains, speeds, band=band, mass_bounds=settings.mass_bounds, share=settings.share, tail=settings.tail,
                       out=None if out is None else Path(out) / "journals", executor=executor, threads=threads, progress=progress)
-    lines = {}  # the influence line at each observation point that governs a deflection
+    lines = {}  # the influence lines at each observation point that governs an effect
 
-    def line_at(x: float):
-        if x not in lines:
-            lines[x] = influence_line(cfg, point=x)
-        return lines[x]
+    def line_at(x: float, quantity: str):
+        if (x, quantity) not in lines:
+            lines[x, quantity] = influence_line(cfg, point=x, quantity=quantity)
+        return lines[x, quantity]
 
     points = cfg.output.points or [cfg.structure.length / 2]
     l_phi = float(settings.l_phi or settings.span)
     phi = phi_2(l_phi) if settings.maintenance == "careful" else phi_3(l_phi)
-    lm71 = max(line_at(float(x)).lm71(settings.alpha, settings.share) for x in points)
+    lm71 = {q: max(line_at(float(x), q).lm71(settings.alpha, settings.share) for x in points) for q in QUANTITIES}
     k_irr = 0.5 if settings.maintenance == "careful" else 1.0
+    irr = phi_irregularity(l_phi, n0, settings.line_speed)
     envelopes = []
     for t in trains:
         sel = scan.select(train=t.name)
-        ok = np.isfinite(sel["disp"])
-        if not ok.any():
-            envelopes.append(TrainEnvelope(t.name, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan))
-            continue
-        i = int(np.argmax(np.where(ok, sel["disp"], -np.inf)))
-        x = float(sel["disp_x"][i])
-        static = line_at(x).train(t, settings.share)
-        phi_dyn = max(0.0, float(sel["disp"][i]) / static - 1.0)
-        irr = phi_irregularity(l_phi, n0, settings.line_speed)
-        envelopes.append(TrainEnvelope(t.name, static, float(sel["disp"][i]), float(sel["speed"][i]), phi_dyn, irr,
-                                       (1.0 + phi_dyn + k_irr * irr) * static, x, line_at(x).lm71(settings.alpha, settings.share)))
+        responses = [response(sel, column, lambda x, q=q: line_at(x, q), t, settings) for column, q in zip(("disp", "moment"), QUANTITIES)]
+        phi_dyn = max(r.phi_dyn for r in responses)  # the larger governs, EN 1991-2 §6.4.6.5(3)
+        envelopes.append(TrainEnvelope(t.name, *responses, phi_dyn, irr if math.isfinite(phi_dyn) else math.nan, k_irr))
     result = Assessment(settings, cfg, n0, freqs, band, damping, achieved,
                         dynamic_analysis_required(settings.span, n0, settings.line_speed, settings.simple_structure, settings.continuous),
-                        scan, lm71, phi, envelopes)
+                        scan, lm71["deflection"], lm71["moment"], phi, envelopes)
     if settings.vehicles:
         plain = apply_code_damping(cfg, code_damping(settings.bridge_type, settings.span, False), n0, band)
         result.interaction = interaction_scan(plain, settings.vehicles, speeds, band=band, mass_bounds=settings.mass_bounds,
@@ -167,6 +179,21 @@ def assess(config: Config, settings: BridgeCheck, out: Union[str, Path, None] = 
     result.checks = checks_of(result)
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def response(sel: dict, column: str, line, train, settings: BridgeCheck) -> Response:
+    """The :class:`Response` of one train's scan ``sel`` in ``column`` (``"disp"`` or
+    ``"moment"``), its static values from ``line(x)``, the influence line at x: NaN when every
+    run failed."""
+    ok = np.isfinite(sel[column])
+    if not ok.any():
+        return Response(*[math.nan] * 6)
+    i = int(np.argmax(np.where(ok, sel[column], -np.inf)))
+    x = float(sel[column + "_x"][i])
+    static = line(x).train(train, settings.share)
+    dynamic = float(sel[column][i])
+    return Response(static, dynamic, float(sel["speed"][i]), max(0.0, dynamic / static - 1.0), x,
+                    line(x).lm71(settings.alpha, settings.share))
 
 
 def mass_frequencies(n0: float, bounds: dict) -> list:
@@ -186,12 +213,17 @@ def checks_of(a: Assessment) -> list:
     gov = a.scan.governing("acc")
     out.append(verdict("deck acceleration", "EN 1990 A2.4.4.2.1(4)P; EN 1991-2 §6.4.6.5", gov["acc"], acceleration_limit(s.track), "m/s²",
                        f"{gov['train']} ({gov['bound']})", gov["speed"], note=f"in the band up to {a.band:.3g} Hz, largest at x = {gov['acc_x']:g} m"))
-    worst = max((e for e in a.envelopes if math.isfinite(e.design)), key=lambda e: e.design / e.lm71, default=None)
     limit = a.phi * a.lm71
-    if worst is not None:
-        out.append(verdict("dynamic envelope within Φ·LM71", "EN 1991-2 §6.4.6.5(3), eq. (6.15)", worst.design, a.phi * worst.lm71, "m", worst.train,
-                           worst.speed, note=f"deflection at x = {worst.x:g} m, where the train's dynamic deflection is largest; where it "
-                           "exceeds Φ·α·LM71 the dynamic envelope governs the design"))
+    for effect, unit, what in (("deflection", "m", "deflection"), ("moment", "N·m", "bending moment")):
+        finite = [e for e in a.envelopes if math.isfinite(getattr(e, effect).design)]
+        if not finite:
+            continue
+        worst = max(finite, key=lambda e: getattr(e, effect).design / getattr(e, effect).lm71)
+        r = getattr(worst, effect)
+        out.append(verdict(f"dynamic envelope within Φ·LM71, {what}", "EN 1991-2 §6.4.6.5(3), eq. (6.15)", r.design, a.phi * r.lm71, unit,
+                           worst.train, r.speed, note=f"{what} at x = {r.x:g} m, where the train's dynamic {what} is largest, with "
+                           f"φ'dyn = {worst.phi_dyn:.3g} (the larger of the deflection's {worst.deflection.phi_dyn:.3g} and the moment's "
+                           f"{worst.moment.phi_dyn:.3g}); where it exceeds Φ·α·LM71 the dynamic envelope governs the design"))
     out.append(verdict("deck deflection, traffic safety", "EN 1990 A2.4.4.2.3(1)", limit, s.span / SAFETY_DEFLECTION_RATIO, "m", "LM71 × Φ × α",
                        note="δ ≤ L/600"))
     if s.comfort_ratio is not None:

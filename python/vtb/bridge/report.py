@@ -1,8 +1,8 @@
 """The bridge check's report: :func:`bridge_check` runs :func:`~vtb.bridge.assess.assess` and
 writes, in ``out``, ``report.md`` (inputs, assumptions with their clauses, the envelopes'
 figures, the governing cases, pass or fail), ``envelopes.csv`` (and ``envelopes.parquet`` when
-pandas and pyarrow are installed) and the figures ``acceleration.png`` and ``deflection.png``
-(one column wide, matplotlib)."""
+pandas and pyarrow are installed) and the figures ``acceleration.png``, ``deflection.png`` and
+``moment.png`` (one column wide, matplotlib)."""
 
 from __future__ import annotations
 
@@ -23,6 +23,8 @@ from .damping import BRIDGE_TYPE_TITLES
 from .settings import BridgeCheck
 
 KMH = 3.6
+#: The figures' scale and unit of each envelope column (m → mm, N·m → MN·m).
+SCALES = {"acc": (1.0, "m/s²"), "disp": (1e3, "mm"), "moment": (1e-6, "MN·m")}
 
 
 def bridge_check(config: Config, settings: Union[BridgeCheck, dict], out: Union[str, Path], executor: Optional[Executor] = None,
@@ -64,8 +66,8 @@ def write(a: Assessment, directory: Path, figures: bool = True) -> dict:
 
 
 def draw(a: Assessment, directory: Path) -> dict:
-    """acceleration.png and deflection.png: each train's envelope against speed (km/h), the
-    limits drawn. Needs matplotlib (else no figure, and the report says so)."""
+    """acceleration.png, deflection.png and moment.png: each train's envelope against speed
+    (km/h), the limits drawn. Needs matplotlib (else no figure, and the report says so)."""
     try:
         from ..analysis.plotting import STYLES, figure, styled
     except ImportError:
@@ -76,24 +78,24 @@ def draw(a: Assessment, directory: Path) -> dict:
     def one(column: str, ylabel: str, limits: list, path: Path):
         fig = figure(70.0)
         ax = fig.add_subplot()
+        scale, unit = SCALES[column]
         names = list(dict.fromkeys(a.scan.columns["train"]))
         bounds = list(dict.fromkeys(a.scan.columns["bound"]))
         for i, name in enumerate(names):
             for j, bound in enumerate(bounds):
                 sel = a.scan.select(train=name, bound=bound)
                 label = name if len(bounds) == 1 else f"{name} ({bound})"
-                scale = 1e3 if column == "disp" else 1.0
                 ax.plot(sel["speed"] * KMH, sel[column] * scale, STYLES[(i + j) % len(STYLES)], label=label, lw=0.8)
         for i, name in enumerate(dict.fromkeys(a.interaction.columns["train"]) if a.interaction is not None else ()):
             sel = a.interaction.select(train=name, bound=bounds[0])
-            ax.plot(sel["speed"] * KMH, sel[column] * (1e3 if column == "disp" else 1.0), color="k", ls=(0, (1 + i, 1)), lw=1.0,
+            ax.plot(sel["speed"] * KMH, sel[column] * scale, color="k", ls=(0, (1 + i, 1)), lw=1.0,
                     label=f"{name}, interaction")
-        top = max([float(np.nanmax(a.scan.columns[column] * (1e3 if column == "disp" else 1.0)))] + [v for v, _, _ in limits[:1]])
+        top = max([float(np.nanmax(a.scan.columns[column] * scale))] + [v for v, _, _ in limits[:1]])
         for value, text, style in limits:
             if value <= 3 * top:
                 ax.axhline(value, color="k", ls=style, lw=1.0, label=text)
             else:  # far above the curves: named, not drawn, so that they stay readable
-                ax.set_title(f"{text}: {value:.3g} {'mm' if column == 'disp' else 'm/s²'} (off scale)", loc="right")
+                ax.set_title(f"{text}: {value:.3g} {unit} (off scale)", loc="right")
         ax.axvline(a.settings.line_speed * KMH, color="0.5", lw=0.6, ls=":", label="line speed")
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel(ylabel)
@@ -108,7 +110,8 @@ def draw(a: Assessment, directory: Path) -> dict:
     disp = one("disp", "deck deflection (mm)",
                [(1e3 * a.phi * a.lm71, "Φ·α·LM71 static", "--"), (1e3 * a.settings.span / 600.0, "L/600 (EN 1990 A2.4.4.2.3)", "-")],
                directory / "deflection.png")
-    return {"acceleration": acc, "deflection": disp}
+    moment = one("moment", "deck bending moment (MN·m)", [(1e-6 * a.phi * a.lm71_moment, "Φ·α·LM71 static", "--")], directory / "moment.png")
+    return {"acceleration": acc, "deflection": disp, "moment": moment}
 
 
 def beyond(a: Assessment) -> list:
@@ -185,23 +188,30 @@ def markdown(a: Assessment, files: dict) -> str:
               + ", ".join(f"{f:.2f} Hz: {100 * z:.3f} %" for f, z in zip(a.frequencies, a.achieved)) + ".",
               f"- LM71 (EN 1991-2 §6.3.2) × α = {s.alpha:g}, static, on the same structure: {1e3 * a.lm71:.4g} mm, the largest over the points; "
               f"Φ{'2' if s.maintenance == 'careful' else '3'} = {a.phi:.4g} (§6.4.5.2, LΦ = {s.l_phi or s.span:g} m).",
-              "- φ'dyn = max dynamic / static deflection − 1 at the point where the train's dynamic deflection is largest (deflection-based; the mid-span moment is "
-              "not computed by this version); φ'' of Annex C at the line speed, halved for carefully maintained track (eq. 6.15).",
+              f"- LM71's static bending moment on the same structure: {1e-6 * a.lm71_moment:.4g} MN·m, the largest over the points.",
+              "- φ'dyn (EN 1991-2 §6.4.6.5(3)) from both responses: max dynamic / static − 1 of the deflection and of the bending moment, each at the point "
+              "where the train's dynamic effect is largest; the larger governs, and the envelope (1 + φ'dyn + kφ'')·static of each effect is checked "
+              "against Φ·α·LM71's. The moment is −EI·w″ of the model's deck at the point, static and dynamic alike (docs/bridge-check.md). "
+              "φ'' of Annex C at the line speed, halved for carefully maintained track (eq. 6.15).",
               "- Moving loads: the axles are constant forces on the top layer; the vehicles' own dynamics are left out, "
               "for which Δζ (eq. 6.13) stands in below 30 m.", "",
               "## Envelopes per train", "",
-              "| train | static δ (mm) | max dynamic δ (mm) | at (km/h) | φ'dyn | φ'' | (1 + φ'dyn + kφ'')·δ (mm) | max acc (m/s²) | at (km/h) |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "| train | static δ (mm) | max dynamic δ (mm) | at (km/h) | φ'dyn, δ | static M (MN·m) | max dynamic M (MN·m) | at (km/h) | "
+              "φ'dyn, M | φ'dyn | φ'' | (1 + φ'dyn + kφ'')·δ (mm) | (1 + φ'dyn + kφ'')·M (MN·m) | max acc (m/s²) | at (km/h) |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for e in a.envelopes:
         sel = a.scan.select(train=e.train)
         i = _peak(sel["acc"])
-        lines.append(f"| {e.train} | {_fmt(1e3 * e.static)} | {_fmt(1e3 * e.dynamic)} | {_fmt(e.speed * KMH, 4)} | {_fmt(e.phi_dyn, 3)} | "
-                     f"{_fmt(e.phi_irr, 3)} | {_fmt(1e3 * e.design)} | {_fmt(sel['acc'][i]) if i is not None else '—'} | "
-                     f"{_fmt(sel['speed'][i] * KMH, 4) if i is not None else '—'} |")
-    lines += ["", f"Φ·α·LM71: {1e3 * a.phi * a.lm71:.4g} mm. Envelopes against speed: `{files['csv']}`"
-              + (f" and `{files['parquet']}`" if "parquet" in files else "") + " (speed in m/s, acc in m/s², disp in m).", ""]
+        d, m = e.deflection, e.moment
+        lines.append(f"| {e.train} | {_fmt(1e3 * d.static)} | {_fmt(1e3 * d.dynamic)} | {_fmt(d.speed * KMH, 4)} | {_fmt(d.phi_dyn, 3)} | "
+                     f"{_fmt(1e-6 * m.static)} | {_fmt(1e-6 * m.dynamic)} | {_fmt(m.speed * KMH, 4)} | {_fmt(m.phi_dyn, 3)} | "
+                     f"{_fmt(e.phi_dyn, 3)} | {_fmt(e.phi_irr, 3)} | {_fmt(1e3 * d.design)} | {_fmt(1e-6 * m.design)} | "
+                     f"{_fmt(sel['acc'][i]) if i is not None else '—'} | {_fmt(sel['speed'][i] * KMH, 4) if i is not None else '—'} |")
+    lines += ["", f"Φ·α·LM71: {1e3 * a.phi * a.lm71:.4g} mm, {1e-6 * a.phi * a.lm71_moment:.4g} MN·m. Envelopes against speed: `{files['csv']}`"
+              + (f" and `{files['parquet']}`" if "parquet" in files else "") + " (speed in m/s, acc in m/s², disp in m, moment in N·m).", ""]
     if "acceleration" in files:
-        lines += ["![Deck acceleration against speed](acceleration.png)", "", "![Deck deflection against speed](deflection.png)", ""]
+        lines += ["![Deck acceleration against speed](acceleration.png)", "", "![Deck deflection against speed](deflection.png)", "",
+                  "![Deck bending moment against speed](moment.png)", ""]
     else:
         lines += ["(No figures: matplotlib is not installed.)", ""]
     lines += beyond(a)
@@ -209,5 +219,6 @@ def markdown(a: Assessment, files: dict) -> str:
               "- The deck is searched at the quarter, middle and three-quarter points of every span, not between them"
               + ("." if len(a.config.structure.layers) > 1 else "; a single-layer model is observed at its first observation point only."),
               "- HSLM-B's N and d (Fig. 6.13), Fig. A2.3's L/δ and Annex F's (v/n0)lim are not encoded: they are inputs.",
-              "- The bending moment's dynamic factor is not computed; φ'dyn is deflection-based.", ""]
+              "- The bending moment is sagging, at the observation points: hogging moments over the supports of continuous decks are not "
+              "searched.", ""]
     return "\n".join(lines)

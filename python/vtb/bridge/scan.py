@@ -5,9 +5,10 @@ the deck's mass, as a study of vtb (journaled, resumable, on any executor).
 (§6.4.6.2(1)) in steps no coarser than ``step``, with a finer step around each resonant speed
 v_i = n0·D/i of each train that falls in the range (§6.4.6.2(3): the peak responses at the
 resonant speeds must be found). :func:`speed_scan` runs them: one :func:`vtb.study` per train
-and mass bound, over the speed, reporting the deck's peak acceleration in the check's band and
-its peak deflection. With a deck under a track (several layers) and several observation points
-the deck is observed at each (the core's ``deck_acc_max_p{j}``, ``deck_disp_max_p{j}``) and the
+and mass bound, over the speed, reporting the deck's peak acceleration in the check's band, its
+peak deflection and its peak bending moment. With a deck under a track (several layers) and
+several observation points the deck is observed at each (the core's ``deck_acc_max_p{j}``,
+``deck_disp_max_p{j}``, ``deck_moment_max_p{j}``) and the
 largest governs: :func:`span_points` puts them at the quarter, middle and three-quarter point of
 every span.
 """
@@ -31,10 +32,10 @@ from .load_trains import LoadTrain, apply_load_train, load_train
 
 #: Largest speed step (m/s) of a scan: 10 km/h.
 MAX_STEP = 10.0 / 3.6
-#: The deck's indices a scan records: (acceleration in the band, deflection), per layer count.
-DECK_INDICES = ("deck_acc_max", "deck_disp_max")
+#: The deck's indices a scan records: (acceleration in the band, deflection, bending moment).
+DECK_INDICES = ("deck_acc_max", "deck_disp_max", "deck_moment_max")
 #: The deck's indices at observation point j (the core's catalogue).
-POINT_INDICES = ("deck_acc_max_p{j}", "deck_disp_max_p{j}")
+POINT_INDICES = ("deck_acc_max_p{j}", "deck_disp_max_p{j}", "deck_moment_max_p{j}")
 #: Where :func:`span_points` observes each span, as fractions of its length.
 SPAN_FRACTIONS = (0.25, 0.5, 0.75)
 
@@ -68,19 +69,21 @@ def scan_speeds(v_min: float, v_max: float, step: float = MAX_STEP, resonances: 
 
 
 def deck_indices(config: Config) -> tuple:
-    """The (acceleration, deflection) index names of the deck of ``config``: the deck's own
-    (``deck_acc_max``, ``deck_disp_max``: the bottom layer, the acceleration low-passed at
-    ``output.deck_band``) when the structure has several layers, else the single layer's
-    (``{layer}_acc_max`` low-passed at ``output.band_limit``, ``{layer}_disp_max``)."""
+    """The (acceleration, deflection, bending moment) index names of the deck of ``config``: the
+    deck's own (``deck_acc_max``, ``deck_disp_max``, ``deck_moment_max``: the bottom layer, the
+    acceleration low-passed at ``output.deck_band``) when the structure has several layers, else
+    the single layer's (``{layer}_acc_max`` low-passed at ``output.band_limit``,
+    ``{layer}_disp_max``, and ``deck_moment_max``, which is the bottom layer's, its own)."""
     if len(config.structure.layers) > 1:
         return DECK_INDICES
     name = config.structure.layers[0].name
-    return (f"{name}_acc_max", f"{name}_disp_max")
+    return (f"{name}_acc_max", f"{name}_disp_max", DECK_INDICES[2])
 
 
 def point_indices(config: Config) -> Optional[tuple]:
-    """The (acceleration, deflection) index names of the deck at every observation point of
-    ``config`` (two lists), or None when it has one point or a single layer."""
+    """The (acceleration, deflection, bending moment) index names of the deck at every
+    observation point of ``config`` (three lists), or None when it has one point or a single
+    layer."""
     n = len(config.output.points)
     if len(config.structure.layers) < 2 or n < 2:
         return None
@@ -124,18 +127,21 @@ def with_mass(config: Config, factor: float) -> Config:
 
 
 #: A scan's columns, and those of them that are numbers.
-COLUMNS = ("train", "bound", "speed", "acc", "disp", "acc_x", "disp_x", "error")
-NUMBERS = ("speed", "acc", "disp", "acc_x", "disp_x")
+COLUMNS = ("train", "bound", "speed", "acc", "disp", "moment", "acc_x", "disp_x", "moment_x", "error")
+NUMBERS = ("speed", "acc", "disp", "moment", "acc_x", "disp_x", "moment_x")
+#: The peaks a scan keeps, each with the point where it occurred (``{peak}_x``).
+PEAKS = ("acc", "disp", "moment")
 
 
 @dataclass
 class ScanResult:
     """A finished scan. ``columns``: numpy arrays ``train`` (name), ``bound`` (the mass bound's
     name), ``speed`` (m/s), ``acc`` (the deck's peak acceleration in the check's band, m/s²),
-    ``disp`` (its peak deflection, m, static part included), ``acc_x`` and ``disp_x`` (the
-    observation point, m, where each peak was found), ``error`` (empty, or why the run
-    failed). ``indices``: the run indices ``acc`` and ``disp`` were read from (two lists, one
-    name per observation point); ``journals``: the study journal of each (train, bound)."""
+    ``disp`` (its peak deflection, m, static part included), ``moment`` (its peak bending
+    moment, N·m, static part included), ``acc_x``, ``disp_x`` and ``moment_x`` (the observation
+    point, m, where each peak was found), ``error`` (empty, or why the run failed).
+    ``indices``: the run indices ``acc``, ``disp`` and ``moment`` were read from (three lists,
+    one name per observation point); ``journals``: the study journal of each (train, bound)."""
 
     columns: dict
     indices: tuple
@@ -155,7 +161,7 @@ class ScanResult:
         return {k: v[mask][order] for k, v in self.columns.items()}
 
     def governing(self, column: str) -> dict:
-        """The run with the largest ``column`` (``"acc"`` or ``"disp"``): its train, bound,
+        """The run with the largest ``column`` (``"acc"``, ``"disp"`` or ``"moment"``): its train, bound,
         speed (m/s) and value."""
         ok = self.columns["error"] == ""
         if not ok.any():
@@ -165,7 +171,8 @@ class ScanResult:
 
     def to_pandas(self):
         """The columns as a DataFrame (units in ``attrs["units"]``; needs pandas)."""
-        return frame(self.columns, {"speed": "m/s", "acc": "m/s²", "disp": "m", "acc_x": "m", "disp_x": "m"})
+        return frame(self.columns, {"speed": "m/s", "acc": "m/s²", "disp": "m", "moment": "N·m", "acc_x": "m", "disp_x": "m",
+                                    "moment_x": "m"})
 
     def to_csv(self, path) -> None:
         """CSV of the columns (numbers by ``repr``: exact round trip)."""
@@ -233,11 +240,10 @@ def run_scan(runs: Sequence[tuple], speeds: Sequence[float], directory: Optional
     names = None
     for train, bound, cfg in runs:
         per_point = point_indices(cfg)
-        acc, disp = per_point if per_point is not None else ([i] for i in deck_indices(cfg))
-        names = (acc, disp)
+        names = per_point if per_point is not None else tuple([i] for i in deck_indices(cfg))
         xs = np.asarray(cfg.output.points or [cfg.structure.length / 2], dtype=float)
         journal = directory / f"{_file_name(train)}__{_file_name(bound)}.csv" if directory is not None else None
-        res = study(cfg, cases=[{"speed": v} for v in speeds], indices=acc + disp, out=journal, executor=executor,
+        res = study(cfg, cases=[{"speed": v} for v in speeds], indices=sum(names, []), out=journal, executor=executor,
                     threads=threads, progress=progress, desc=f"{train} ({bound})")
         journals[(train, bound)] = None if journal is None else str(journal)
         n = len(res)
@@ -245,7 +251,7 @@ def run_scan(runs: Sequence[tuple], speeds: Sequence[float], directory: Optional
         cols["bound"] += [bound] * n
         cols["speed"] += list(res.columns["speed"])
         cols["error"] += list(res.columns["error"])
-        for key, which in (("acc", acc), ("disp", disp)):
+        for key, which in zip(PEAKS, names):
             table = np.column_stack([np.asarray(res.columns[i], dtype=float) for i in which])
             ok = np.isfinite(table).any(axis=1)
             j = np.argmax(np.where(np.isfinite(table), table, -np.inf), axis=1)

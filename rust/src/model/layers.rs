@@ -151,6 +151,19 @@ impl Layer {
         out.start += self.offset;
     }
 
+    /// Bending-moment shape vector at x (N·m per unit DOF, sagging positive: M = −EI·w″ with
+    /// w down positive; −EI·ψ′ for Timoshenko elements), structure numbering.
+    pub fn moment_shape(&self, x: f64) -> Shape {
+        let mut s = Shape {
+            start: 0,
+            values: vec![0.0; self.basis.shape_len()],
+        };
+        self.basis.eval_curvature(x, &mut s);
+        s.values.iter_mut().for_each(|v| *v *= -self.ei);
+        s.start += self.offset;
+        s
+    }
+
     pub fn shape(&self, x: f64) -> Shape {
         let mut s = self.basis.shape(x);
         s.start += self.offset;

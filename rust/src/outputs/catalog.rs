@@ -118,6 +118,9 @@ pub const DECK: &str = "deck_acc_max";
 /// The deck's acceleration (as [`DECK`]) and displacement at observation point `{j}`.
 pub const DECK_ACC_POINT: &str = "deck_acc_max_p{j}";
 pub const DECK_DISP_POINT: &str = "deck_disp_max_p{j}";
+/// The bottom layer's bending moment at the first observation point and at point `{j}`.
+pub const DECK_MOMENT: &str = "deck_moment_max";
+pub const DECK_MOMENT_POINT: &str = "deck_moment_max_p{j}";
 
 /// Every kind of index, in the order `index_names` lists them (a layer's all together).
 pub const CATALOG: &[IndexKind] = &[
@@ -195,6 +198,16 @@ pub const CATALOG: &[IndexKind] = &[
         present: deck,
     },
     IndexKind {
+        pattern: DECK_MOMENT,
+        unit: "N·m",
+        subject: Subject::Deck,
+        band: Band::Raw,
+        description: "peak |bending moment| of the bottom layer (a single layer's own), M = −EI·w″ \
+                      of the model's basis (sagging positive; the moving loads' static moment \
+                      included): the moment of EN 1991-2 §6.4.6.5(3)'s φ'dyn",
+        present: always,
+    },
+    IndexKind {
         pattern: DECK_ACC_POINT,
         unit: "m/s²",
         subject: Subject::DeckPoint,
@@ -210,6 +223,15 @@ pub const CATALOG: &[IndexKind] = &[
         band: Band::Raw,
         description: "peak |displacement| of the bottom layer at observation point j (static \
                       deflection included)",
+        present: deck_points,
+    },
+    IndexKind {
+        pattern: DECK_MOMENT_POINT,
+        unit: "N·m",
+        subject: Subject::DeckPoint,
+        band: Band::Raw,
+        description: "peak |bending moment| of the bottom layer at observation point j (as \
+                      deck_moment_max)",
         present: deck_points,
     },
     IndexKind {
@@ -425,6 +447,18 @@ pub fn every_point(cfg: &Config) -> bool {
             None => deck(cfg),
             Some(names) => names.iter().any(|n| per_point(n)),
         }
+}
+
+/// Whether a run's metrics need the bottom layer's bending moment (`output.indices` names a
+/// moment index, or is empty).
+pub fn moments(cfg: &Config) -> bool {
+    let moment = |n: &str| {
+        n == DECK_MOMENT || kind_of(cfg, n).is_some_and(|k| k.pattern == DECK_MOMENT_POINT)
+    };
+    match &cfg.output.indices {
+        None => !cfg.structure.layers.is_empty(),
+        Some(names) => names.iter().any(|n| moment(n)),
+    }
 }
 
 /// The name of a per-point index `pattern` (`{j}`) at observation point `j`.

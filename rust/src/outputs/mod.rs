@@ -11,7 +11,10 @@ pub use catalog::{DECK, index_layers, index_names, layer_of_index};
 
 use crate::config::Config;
 use crate::model::structure::Structure;
-use catalog::{DECK_ACC_POINT, DECK_DISP_POINT, band_index, car_comfort, layer_index, point_index};
+use catalog::{
+    DECK_ACC_POINT, DECK_DISP_POINT, DECK_MOMENT, DECK_MOMENT_POINT, band_index, car_comfort,
+    layer_index, point_index,
+};
 use filter::low_pass;
 use indices::{amplitude, rms, settle_time};
 use std::collections::BTreeMap;
@@ -42,6 +45,14 @@ impl Record {
         match self {
             Record::Full => (0..cfg.structure.layers.len()).collect(),
             Record::Metrics => index_layers(cfg),
+        }
+    }
+
+    /// Whether a run records the bottom layer's bending moment (at its recorded points).
+    pub fn moments(self, cfg: &Config) -> bool {
+        match self {
+            Record::Full => !cfg.structure.layers.is_empty(),
+            Record::Metrics => catalog::moments(cfg),
         }
     }
 
@@ -92,6 +103,12 @@ pub struct RunResult {
     pub deck: Option<usize>,
     /// Low-pass frequency (Hz) of `deck_acc_max`, `output.deck_band`.
     pub deck_band: f64,
+    /// Observation points at which the bottom layer's bending moment is recorded (all of
+    /// `points`, or none).
+    pub n_moments: usize,
+    /// Its bending moment (N·m, sagging positive, `Layer::moment_shape`) at
+    /// `[step·n_moments + point]`.
+    pub moment: Vec<f64>,
     /// Rail fasteners recorded (`output.pad_forces`: the one nearest each observation point).
     pub n_pads: usize,
     /// Force in each of them (N, compression positive) at `[step·n_pads + pad]`.
@@ -111,6 +128,7 @@ impl RunResult {
         let layers = record.layers(cfg);
         let nl = layers.len();
         let len = n_steps + 1;
+        let n_moments = if record.moments(cfg) { points.len() } else { 0 };
         let (n_cars, vehicle_dofs) = match record {
             Record::Full => (
                 n_cars,
@@ -142,6 +160,8 @@ impl RunResult {
                 .then(|| layers.iter().position(|&l| l + 1 == st.layers.len()))
                 .flatten(),
             deck_band: cfg.output.deck_band,
+            n_moments,
+            moment: vec![0.0; len * n_moments],
             n_pads: catalog::pads_of(cfg).len(),
             pad_force: vec![0.0; len * catalog::pads_of(cfg).len()],
         }
@@ -182,7 +202,8 @@ impl RunResult {
     /// comfort `car_comfort_aw` (ISO 2631-1 a_w of the raw record, at sampling rates ≥ 400 Hz),
     /// and each further car's `car{k}_comfort_aw`; the deck acceleration `deck_acc_max` (the
     /// bottom layer's, low-passed at `output.deck_band`, EN 1990 A2); `contact_force_max`,
-    /// and at each observation point j (recorded) `deck_acc_max_p{j}` and `deck_disp_max_p{j}`;
+    /// the bottom layer's bending moment `deck_moment_max` (N·m), and at each observation point j
+    /// (recorded) `deck_acc_max_p{j}`, `deck_disp_max_p{j}` and `deck_moment_max_p{j}`;
     /// `contact_force_min`, `contact_loss_events` over all wheels and each wheel's
     /// `wheel{w}_force_max`, `wheel{w}_force_min`; with `output.pad_forces`, the force range
     /// `pad{j}_force_range` of the rail fastener nearest each observation point j. The
@@ -213,6 +234,10 @@ impl RunResult {
             let u = &self.layer_disp(d, 0)[steps.clone()];
             m.insert("deck_disp_max".to_string(), amplitude(u));
         }
+        if self.n_moments > 0 && self.wants(DECK_MOMENT) {
+            let mo = &Self::column(&self.moment, self.n_moments, 0)[steps.clone()];
+            m.insert(DECK_MOMENT.to_string(), amplitude(mo));
+        }
         self.deck_point_metrics(&steps, &mut m);
         self.contact_metrics(&steps, &mut m);
         for j in 0..self.n_pads {
@@ -241,6 +266,11 @@ impl RunResult {
             let disp = point_index(DECK_DISP_POINT, j);
             if self.wants(&disp) {
                 m.insert(disp, amplitude(&self.layer_disp(d, j)[steps.clone()]));
+            }
+            let moment = point_index(DECK_MOMENT_POINT, j);
+            if self.n_moments > j && self.wants(&moment) {
+                let mo = &Self::column(&self.moment, self.n_moments, j)[steps.clone()];
+                m.insert(moment, amplitude(mo));
             }
         }
     }

@@ -54,13 +54,17 @@ pub(crate) fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Boun
 /// Shape vectors of layer `layer` (index, top = 0) at the positions `xs` (m), in the
 /// structure's DOF numbering: (starts, values) with values of shape (len(xs), width); row i is
 /// nonzero on the DOFs starts[i] .. starts[i] + width. The hybrid rail's vectors carry the
-/// FE–SEA correction, exactly as the wheels and the outputs see them.
+/// FE–SEA correction, exactly as the wheels and the outputs see them. With `moment`, the
+/// bending-moment vectors instead (N·m per unit DOF, sagging positive: `Layer::moment_shape`,
+/// as the run records `deck_moment_max`).
 #[pyfunction]
+#[pyo3(signature = (config_json, layer, xs, moment = false))]
 pub(crate) fn shapes<'py>(
     py: Python<'py>,
     config_json: &str,
     layer: usize,
     xs: PyReadonlyArray1<'_, f64>,
+    moment: bool,
 ) -> PyResult<ShapeRows<'py>> {
     let cfg = parse_config(py, config_json)?;
     let model = vtb::check::validated(cfg, Profile::flat()).map_err(|e| to_py_err(py, e))?;
@@ -92,7 +96,11 @@ pub(crate) fn shapes<'py>(
                 ),
             ));
         }
-        let s = st.shape(layer, x);
+        let s = if moment {
+            st.layers[layer].moment_shape(x)
+        } else {
+            st.shape(layer, x)
+        };
         starts.push(s.start as i64);
         values.extend_from_slice(&s.values);
     }

@@ -46,9 +46,11 @@ pub(super) struct NewmarkSide<'m, const W: usize> {
     rail_free: Vec<f64>,
     /// The end of the step under way (s).
     t1: f64,
-    /// Observers of the layers' records (the first ones), then of each pad's two ends.
+    /// Observers of the layers' records (the first ones), then of each pad's two ends, then
+    /// of the bottom layer's bending moment at each of `n_moments` points.
     n_layer_obs: usize,
     pads: Vec<Pad>,
+    n_moments: usize,
 }
 
 /// W coupled runs of one model on the Newmark engine.
@@ -180,6 +182,12 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             track.observe(&st.shape(0, pad.x));
             track.observe(&st.shape(pad.lower, pad.x));
         }
+        let n_moments = if record.moments(cfg) { points.len() } else { 0 };
+        if let Some(deck) = st.layers.last().filter(|_| n_moments > 0) {
+            for &x in points {
+                track.observe(&deck.moment_shape(x));
+            }
+        }
         let movers = Mover::all(cfg);
         let n = track.n;
         let shape_len = st
@@ -220,6 +228,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             t1: 0.0,
             n_layer_obs,
             pads,
+            n_moments,
             track,
         })
     }

@@ -214,6 +214,10 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
                 }
                 r.pad_force[step * np + j] = pad.force(uu - ul, vu - vl);
             }
+            let (nm, first) = (self.n_moments, no + 2 * np);
+            for j in 0..nm {
+                r.moment[step * nm + j] = self.track.observed(first + j, lane).0;
+            }
         }
     }
 

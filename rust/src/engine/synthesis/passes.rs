@@ -508,7 +508,7 @@ impl<const W: usize> StructureSide<W> for SynthesisSide<'_, W> {
     fn finish(&mut self, c: usize, r: &mut RunResult) {
         let (no, dt) = (self.observers.len(), self.dt());
         let lane = &self.lanes[c];
-        let observers = (no, no - 2 * self.pads.len());
+        let observers = (no, no - 2 * self.pads.len() - r.n_moments);
         records(r, &lane.readouts, &lane.residual, observers, &self.pads, dt);
     }
 }

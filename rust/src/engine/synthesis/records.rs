@@ -59,6 +59,15 @@ pub(super) fn records(
         }
     }
     let np = pads.len();
+    // The bending moments, after the pads' ends: read as the displacements are.
+    let nm = r.n_moments;
+    for k in 0..nm {
+        let j = no_layer + 2 * np + k;
+        let (d, rr) = (series(j, 0), padded(n, |s| residual[s * no + j]));
+        for s in 0..n {
+            r.moment[s * nm + k] = e(&d, s) + rr[s + 2];
+        }
+    }
     for (p, pad) in pads.iter().enumerate() {
         // (u, u̇) of the pad's upper and lower end at every sample.
         let ends: Vec<Vec<(f64, f64)>> = (0..2)

@@ -473,7 +473,8 @@ fn damper_ports(
 }
 
 /// What each observer reads: the layers' records, layer by layer and point by point, then each
-/// pad's upper and lower end, read for velocity: (layer, shape, velocity).
+/// pad's upper and lower end, read for velocity, then the bottom layer's bending moment at
+/// each point when the run records it: (layer, shape, velocity).
 fn observed_shapes(
     model: &Model,
     record: Record,
@@ -488,10 +489,15 @@ fn observed_shapes(
     let ends = pads
         .iter()
         .flat_map(|p| [(0, p.x, true), (p.lower, p.x, true)]);
-    layers
+    let shapes = layers
         .chain(ends)
-        .map(|(li, x, velocity)| (li, st.shape(li, x), velocity))
-        .collect()
+        .map(|(li, x, velocity)| (li, st.shape(li, x), velocity));
+    let deck = st.layers.len().saturating_sub(1);
+    let moments = points
+        .iter()
+        .filter(|_| record.moments(cfg))
+        .map(|&x| (deck, st.layers[deck].moment_shape(x), false));
+    shapes.chain(moments).collect()
 }
 
 /// The observers of `shapes` with their gains: each reads Re Σ ψᵀs·Q and Re Σ λ²ψᵀs·Q

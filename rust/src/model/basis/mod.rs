@@ -98,6 +98,36 @@ impl LayerBasis {
         }
     }
 
+    /// Curvature shape vector κ(x): w″ of the basis functions (ψ′ of a Timoshenko element,
+    /// whose bending moment is EI·ψ′), laid out as `eval`'s and overwritten without
+    /// allocating. At a node it is the element's on the right, as `eval`.
+    #[inline]
+    pub fn eval_curvature(&self, x: f64, out: &mut Shape) {
+        match self {
+            LayerBasis::Modal(b) => {
+                out.start = 0;
+                if (0.0..=b.length).contains(&x) {
+                    b.curvature_into(x, &mut out.values);
+                } else {
+                    out.values.fill(0.0);
+                }
+            }
+            LayerBasis::Fem(b) if !b.covers(x) => {
+                out.start = 0;
+                out.values.fill(0.0);
+            }
+            LayerBasis::Fem(b) => {
+                let e = b.element_of(x);
+                let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
+                out.start = 2 * e;
+                let xi = x - a;
+                for (o, c) in out.values.iter_mut().zip(&interdependent(l, b.phi[e])[1]) {
+                    *o = c[1] + xi * (2.0 * c[2] + xi * 3.0 * c[3]);
+                }
+            }
+        }
+    }
+
     pub fn shape(&self, x: f64) -> Shape {
         let mut s = Shape {
             start: 0,

@@ -127,6 +127,34 @@ impl ModalBasis {
         out[3] = (h[3] - p4) / self.mu[1];
     }
 
+    /// Second derivatives of all basis functions at x into `out` (length n_dofs): the end
+    /// functions have none, the sines −k_n²·s_n, the residuals (h″ − Σ proj·(−k_n²)·sin)/μ.
+    #[inline]
+    pub fn curvature_into(&self, x: f64, out: &mut [f64]) {
+        let l = self.length;
+        let s = x / l;
+        // h2″ and h4″ of `hermite_values` (h2 = L(s − 2s² + s³), h4 = L(s³ − s²)).
+        let (h2, h4) = ((6.0 * s - 4.0) / l, (6.0 * s - 2.0) / l);
+        let th = PI * x / l;
+        let (s1, c1) = th.sin_cos();
+        let two_c = 2.0 * c1;
+        let (mut prev, mut cur) = (0.0, s1);
+        let (mut p2, mut p4) = (0.0, 0.0);
+        for (n, v) in out[4..4 + self.n_sines].iter_mut().enumerate() {
+            let k2 = self.wavenumber(n + 1).powi(2);
+            *v = -k2 * self.scale * cur;
+            p2 += self.proj[0][n] * k2 * cur;
+            p4 += self.proj[1][n] * k2 * cur;
+            let next = two_c * cur - prev;
+            prev = cur;
+            cur = next;
+        }
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = (h2 + p2) / self.mu[0];
+        out[3] = (h4 + p4) / self.mu[1];
+    }
+
     /// ∫ N_a·N_bᵀ (`Derivative::Value`) or ∫ N_a″·N_b″ᵀ (`Curvature`) of two modal bases on
     /// the same length, row-major n_dofs(a) × n_dofs(b).
     pub fn gram(a: &ModalBasis, b: &ModalBasis, curvature: bool) -> Vec<f64> {
