@@ -24,7 +24,7 @@ import vtb
 from vtb.bridge.damping import apply_code_damping, code_damping
 from vtb.bridge.interaction import interaction_scan, with_vehicles
 from vtb.bridge.load_trains import load_train
-from vtb.bridge.scan import span_points, speed_scan, with_band
+from vtb.bridge.scan import COLUMNS, span_points, speed_scan, with_band
 from vtb.studies.grid import study
 
 L = 15.0          # span (m)
@@ -94,7 +94,7 @@ def test_interaction_scan_has_the_moving_load_scans_shape(tmp_path):
     """Journaled per (train, bound), resumable, the same columns; an unknown train is refused by
     name."""
     res = interaction_scan(_beam(), ["velaro_e"], [50.0, 70.0], cars=1, out=tmp_path, progress=False)
-    assert set(res.columns) == {"train", "bound", "speed", "acc", "disp", "acc_x", "disp_x", "error"}
+    assert set(res.columns) == set(COLUMNS)
     assert (tmp_path / "velaro_e__nominal.csv").is_file() and (res.columns["error"] == "").all()
     again = interaction_scan(_beam(), ["velaro_e"], [50.0, 70.0], cars=1, out=tmp_path, progress=False)
     assert np.array_equal(again.columns["acc"], res.columns["acc"])

@@ -18,6 +18,7 @@ use crate::error::{Result, VtbError};
 use crate::linalg::sparse::Ldlt;
 use crate::model::Model;
 use crate::model::basis::Shape;
+use crate::model::structure::Structure;
 use crate::outputs::catalog::{Pad, pads_of};
 use crate::outputs::{Record, RunResult};
 use correction::{RailCorrection, dot};
@@ -182,12 +183,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             track.observe(&st.shape(0, pad.x));
             track.observe(&st.shape(pad.lower, pad.x));
         }
-        let n_moments = if record.moments(cfg) { points.len() } else { 0 };
-        if let Some(deck) = st.layers.last().filter(|_| n_moments > 0) {
-            for &x in points {
-                track.observe(&deck.moment_shape(x));
-            }
-        }
+        let n_moments = observe_moments(&mut track, st, record.moments(cfg), points);
         let movers = Mover::all(cfg);
         let n = track.n;
         let shape_len = st
@@ -372,3 +368,19 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
 
 #[cfg(test)]
 mod tests;
+
+/// Observers of the bottom layer's bending moment at `points` when `wanted`; their count.
+fn observe_moments<const W: usize>(
+    track: &mut Newmark<W>,
+    st: &Structure,
+    wanted: bool,
+    points: &[f64],
+) -> usize {
+    let Some(deck) = st.layers.last().filter(|_| wanted) else {
+        return 0;
+    };
+    for &x in points {
+        track.observe(&deck.moment_shape(x));
+    }
+    points.len()
+}
