@@ -27,7 +27,6 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 #: Seconds a fresh worker may take to import vtb before its first case (not a case's hang).
 STARTUP = 120.0
-SURFACES = ("config", "trains", "zones", "spans", "profile", "dampers", "bands", "contact", "edges", "studies", "optimisation")
 WORKER = r"""
 import json, random, sys, warnings
 sys.path.insert(0, sys.argv[1])
@@ -42,7 +41,11 @@ for i in range(start, stop):
     v, detail = fuzz_surfaces.verdict(label, thunk, inputs)
     print(json.dumps({"i": i, "surface": surface, "label": label[:200], "verdict": v, "detail": detail[:300]}), flush=True)
 """
-VERDICTS = ("ok", "refused", "abort", "panic", "hang", "undocumented", "unnamed", "nonfinite", "mutated")
+sys.path.insert(0, str(HERE.parent / "tests"))
+from fuzz_surfaces import FINDINGS, SURFACES  # noqa: E402 - the one list of surfaces and verdicts
+
+#: ok, refused, then the findings: the two the runner sees (a dead worker, a silent one) and the verdict's.
+VERDICTS = ("ok", "refused", "abort", "hang") + FINDINGS
 
 
 def run_range(seed: int, start: int, stop: int, timeout: float, out: collections.Counter, findings: dict, surfaces: str) -> None:

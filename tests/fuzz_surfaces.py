@@ -23,6 +23,7 @@ import copy
 import math
 import random
 import tempfile
+import time
 import warnings
 from pathlib import Path
 
@@ -30,11 +31,13 @@ import numpy as np
 
 import vtb
 from vtb.errors import ConfigError, ConvergenceError, OutputError, SolverError, VtbError
+import fuzz_bridge
 import fuzz_cases
 from fuzz_cases import BAD_NUMBERS, BAD_OTHER, small_config
 
-SURFACES = ("config", "trains", "zones", "spans", "profile", "dampers", "bands", "contact", "edges", "studies", "optimisation")
-FINDINGS = ("panic", "unnamed", "undocumented", "nonfinite", "mutated")
+FINDINGS = ("panic", "unnamed", "undocumented", "nonfinite", "mutated", "slow")
+#: Seconds within which a refusal must answer: a bad value is refused before any work.
+REFUSAL_SECONDS = 1.0
 UNNAMED = fuzz_cases.UNNAMED
 
 #: Plausible values per role, mixed with the bad ones so that a case gets past its first check.
@@ -314,7 +317,10 @@ def _older(rng):
 
 
 _MAKERS = {"config": _older, "trains": _trains, "zones": _zones, "spans": _spans, "profile": _profile, "dampers": _dampers,
-           "bands": _bands, "contact": _contact, "edges": _edges, "studies": _studies, "optimisation": _optimisation}
+           "bands": _bands, "contact": _contact, "edges": _edges, "studies": _studies, "optimisation": _optimisation,
+           **fuzz_bridge.MAKERS}
+#: The surfaces, in the order the long run takes them (benches/fuzz_config.py imports this).
+SURFACES = tuple(_MAKERS)
 
 
 def make_case(rng: random.Random, surface: str):
@@ -332,11 +338,30 @@ def _finite(res) -> bool:
     if isinstance(res, vtb.Config):
         text = res.to_json() if hasattr(res, "to_json") else str(res.to_dict())
         return "NaN" not in text and "Infinity" not in text
-    if isinstance(res, list):
+    if isinstance(res, (list, tuple)):
         return all(_finite(x) for x in res)
+    if isinstance(res, dict):
+        return all(_finite(x) for x in res.values())
     if isinstance(res, vtb.StudyResult):
         ok = res.succeeded
         return all(np.isfinite(res.columns[k][ok]).all() for k in res.indices)
+    if isinstance(res, vtb.ScanResult):  # a failed run's row is NaN by design, its error says why
+        ok = res.columns["error"] == ""
+        return all(np.isfinite(res.columns[k][ok]).all() for k in ("speed", "acc", "disp", "acc_x", "disp_x"))
+    if isinstance(res, vtb.Assessment):
+        return all(math.isfinite(v) for v in (res.n0, res.band, res.lm71, res.phi, res.damping.ratio)) and _finite(res.scan)
+    if isinstance(res, vtb.LoadTrain):
+        return _finite(res.positions) and _finite(res.loads) and (res.spacing is None or math.isfinite(res.spacing))
+    if isinstance(res, vtb.MovingForce):
+        return math.isfinite(res.magnitude) and math.isfinite(res.x0)
+    if hasattr(res, "ratio") and hasattr(res, "interaction"):  # the code's damping
+        return math.isfinite(res.ratio)
+    if hasattr(res, "g") and hasattr(res, "x"):  # an influence line
+        return bool(np.isfinite(res.g).all() and np.isfinite(res.x).all())
+    if isinstance(res, np.ndarray) and res.dtype.kind in "fiu":
+        return bool(np.isfinite(res).all())
+    if isinstance(res, (float, np.floating)) and not isinstance(res, bool):
+        return math.isfinite(res)
     if hasattr(res, "F"):
         return bool(np.isfinite(np.asarray(res.F, dtype=float)).all())
     if hasattr(res, "x_front"):  # a vehicle
@@ -345,13 +370,15 @@ def _finite(res) -> bool:
 
 
 def _snapshot(objs):
-    return [o.to_dict() if isinstance(o, vtb.Config) else copy.deepcopy(o) for o in objs]
+    # as text: NaN compares equal to itself, and arrays compare as a whole
+    return [repr(o.to_dict() if isinstance(o, vtb.Config) else o) for o in objs]
 
 
 def verdict(label: str, thunk, inputs=()) -> tuple[str, str]:
     """Runs a case: ``("ok", "")`` for a finite result, ``("refused", field)`` for a vtb error
     naming a usable field, else a finding (module docstring) with its detail."""
     before = _snapshot(inputs)
+    t0 = time.perf_counter()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -374,6 +401,9 @@ def verdict(label: str, thunk, inputs=()) -> tuple[str, str]:
         return "undocumented", f"{type(e).__name__}: {e}"
     else:
         out = ("ok", "") if _finite(res) else ("nonfinite", label)
+    seconds = time.perf_counter() - t0
     if _snapshot(inputs) != before:
         return "mutated", label
+    if out[0] == "refused" and seconds > REFUSAL_SECONDS:
+        return "slow", f"refused ({out[1]}) after {seconds:.2f} s"
     return out

@@ -120,3 +120,54 @@ def test_cli_writes_the_report(tmp_path):
     code = cli.main(["bridge-check", str(tmp_path / "bridge.toml"), "--out", str(tmp_path / "out"), "--no-progress", "--no-plot"])
     assert code in (0, 1) and (tmp_path / "out" / "report.md").is_file()
     assert cli.main(["bridge-check", str(tmp_path / "missing.toml"), "--out", str(tmp_path / "o2")]) == 2
+
+
+# Findings of the fuzzer (tests/fuzz_bridge.py), each refused with the field named, at once.
+
+def test_acceleration_limit_names_an_unhashable_track():
+    with pytest.raises(vtb.ConfigError) as e:
+        acceleration_limit(["ballasted"])  # was TypeError: unhashable type
+    assert e.value.field == "track"
+
+
+def test_phi_irregularity_of_a_huge_length_is_zero_not_an_overflow():
+    assert phi_irregularity(1e300, 4.0, 60.0) == 0.0  # was OverflowError from LΦ²
+    assert phi_irregularity(1000.0, 4.0, 60.0) == 0.0 == phi_irregularity(600.0, 4.0, 60.0)
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda line: line.lm71({"a": 1}, 1.0), "alpha"),          # was TypeError
+    (lambda line: line.lm71(float("inf"), 1.0), "alpha"),      # was an infinite deflection
+    (lambda line: line.train(load_train("crh3"), float("nan")), "share"),  # was NaN
+    (lambda line: line.train(load_train("crh3"), [1.0, 2.0]), "share"),    # was a broadcast ValueError
+])
+def test_influence_line_effects_refuse_bad_factors(call, field):
+    with pytest.raises(vtb.ConfigError) as e:
+        call(influence_line(_beam()))
+    assert e.value.field == field
+
+
+def test_influence_line_refuses_a_tiny_step_at_once():
+    import time
+    t0 = time.perf_counter()
+    with pytest.raises(vtb.ConfigError) as e:
+        influence_line(_beam(), dx=1e-15)  # was a MemoryError allocating 2·10^16 samples
+    assert e.value.field == "dx" and time.perf_counter() - t0 < 1.0
+
+
+@pytest.mark.parametrize("kwargs, field", [({"share": "true"}, "share"), ({"fmax": float("nan")}, "fmax"), ({"cluster": -1.0}, "cluster")])
+def test_deck_frequencies_refuse_bad_options(kwargs, field):
+    from vtb.bridge.static import deck_frequencies
+    with pytest.raises(vtb.ConfigError) as e:
+        deck_frequencies(_beam(), **kwargs)  # share "true" was a numpy UFuncTypeError
+    assert e.value.field == field
+
+
+@pytest.mark.parametrize("changes, field", [({"bridge_type": {}}, "bridge_check.bridge_type"), ({"track": ["ballasted"]}, "bridge_check.track"),
+                                            ({"line_speed": 1e30}, "bridge_check.line_speed"), ({"step": 1e-12}, "bridge_check.step")])
+def test_bad_settings_are_named_at_once(changes, field):
+    import time
+    t0 = time.perf_counter()
+    with pytest.raises(vtb.ConfigError) as e:
+        BridgeCheck.from_dict({**SETTINGS, **changes})  # an unhashable type was a TypeError; line_speed 1e30 a hang in the scan's speeds
+    assert e.value.field == field and time.perf_counter() - t0 < 1.0

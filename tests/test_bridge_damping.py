@@ -60,3 +60,16 @@ def test_bad_inputs_are_named(call, field):
     with pytest.raises(vtb.ConfigError) as e:
         call()
     assert e.value.field == field
+
+
+def test_an_unhashable_bridge_type_is_named():
+    with pytest.raises(vtb.ConfigError) as e:
+        code_damping({}, 20.0)  # was TypeError: unhashable type
+    assert e.value.field == "bridge_type"
+
+
+@pytest.mark.parametrize("frequencies", [[0.0], [float("nan")], "x", [[1.0]]])
+def test_achieved_ratios_refuse_frequencies_that_are_not_positive(frequencies):
+    with pytest.raises(vtb.ConfigError) as e:
+        achieved_ratios(code_rayleigh(0.013, 4.0, 36.0), frequencies)  # 0 Hz gave inf, NaN gave NaN, "x" a ValueError
+    assert e.value.field == "frequencies"

@@ -81,3 +81,51 @@ def test_bad_csv_rows_are_named(tmp_path):
         read_load_train(f)
     with pytest.raises(vtb.ConfigError, match="no such CSV"):
         read_load_train(tmp_path / "missing.csv")
+
+
+# Findings of the fuzzer (tests/fuzz_bridge.py), each refused with the field named.
+
+@pytest.mark.parametrize("positions, loads, field", [
+    ((), (), "positions"),                          # was IndexError from .length
+    ((0.0, 3.0), (1e5, float("nan")), "loads[1]"),   # was NaN moving forces
+    ((0.0, 3.0), {"a": 1}, "loads"),                 # was ValueError from float('a')
+    ((0.0,), -1e300, "loads"),                       # was TypeError in a scan
+    ((0.0, 5.0, 2.0), (1e5,) * 3, "positions"),      # unsorted, as a CSV file's rows are refused
+    ((0.0,), (0.0,), "loads"),
+    ((0.0, 1.0), (1e5,), "loads"),
+])
+def test_a_user_load_train_table_is_checked_when_made(positions, loads, field):
+    with pytest.raises(vtb.ConfigError) as e:
+        vtb.LoadTrain("user", positions, loads, "test")
+    assert e.value.field == field
+
+
+def test_hslm_b_refuses_a_huge_count_at_once():
+    import time
+    t0 = time.perf_counter()
+    with pytest.raises(vtb.ConfigError) as e:
+        load_train("HSLM-B", n=10**20, d=3.0)  # was a hang building 10^20 axles
+    assert e.value.field == "n" and time.perf_counter() - t0 < 1.0
+
+
+@pytest.mark.parametrize("kwargs, field", [({"x_front": "x"}, "x_front"), ({"x_front": float("nan")}, "x_front"), ({"layer": 3}, "layer")])
+def test_forces_refuse_a_bad_front_or_layer(kwargs, field):
+    with pytest.raises(vtb.ConfigError) as e:
+        load_train("HSLM-A1").forces(**kwargs)  # x_front "x" was a ValueError
+    assert e.value.field == field
+
+
+@pytest.mark.parametrize("tail", ["x", {"a": 1}, float("nan"), -1.0])
+def test_apply_load_train_refuses_a_bad_tail(tail):
+    with pytest.raises(vtb.ConfigError) as e:
+        apply_load_train(vtb.paper_config(), "HSLM-A1", tail=tail)  # "x" was a ValueError from float()
+    assert e.value.field == "tail"
+
+
+@pytest.mark.parametrize("args, orders, field", [((4.0, 18.0, 75.0), [0], "orders"), ((4.0, 18.0, [None]), range(1, 3), "v_max"),
+                                                 (([], 18.0, 75.0), range(1, 3), "frequency")])
+def test_resonant_speeds_refuse_bad_input(args, orders, field):
+    from vtb.bridge.load_trains import resonant_speeds
+    with pytest.raises(vtb.ConfigError) as e:
+        resonant_speeds(*args, orders=orders)  # order 0 was a ZeroDivisionError, a list a TypeError
+    assert e.value.field == field

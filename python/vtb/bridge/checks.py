@@ -22,6 +22,8 @@ ACCELERATION_LIMITS = {"ballasted": 3.5, "direct_fastened": 5.0}
 SAFETY_DEFLECTION_RATIO = 600.0
 #: Speed (m/s) above which EN 1991-2 Fig. 6.9 always asks for a dynamic analysis: 200 km/h.
 FLOW_CHART_SPEED = 200.0 / 3.6
+#: LΦ (m) beyond which Annex C's φ'' is 0: e^−(LΦ/20)² underflows from about 550 m on.
+LONG_L_PHI = 1000.0
 
 
 def _positive(name: str, v) -> float:
@@ -102,6 +104,8 @@ def phi_irregularity(l_phi: float, n0: float, speed: float) -> float:
     real trains' dynamic effect (the ballast's carefully maintained track takes half of it)."""
     length, n, v = _positive("l_phi", l_phi), _positive("n0", n0), _positive("speed", speed)
     a = min(v / 22.0, 1.0)
+    if length > LONG_L_PHI:
+        return 0.0  # both terms' e^−(LΦ/10)², e^−(LΦ/20)² are 0 in floating point (and LΦ² would overflow)
     value = a / 100.0 * (56.0 * math.exp(-((length / 10.0) ** 2)) + 50.0 * (length * n / 80.0 - 1.0) * math.exp(-((length / 20.0) ** 2)))
     return max(0.0, value)
 
@@ -109,7 +113,7 @@ def phi_irregularity(l_phi: float, n0: float, speed: float) -> float:
 def acceleration_limit(track: str) -> float:
     """The deck's peak acceleration limit (m/s²) of EN 1990 A2.4.4.2.1(4)P: 3.5 for ballasted
     track, 5 for direct fastened track."""
-    if track not in ACCELERATION_LIMITS:
+    if not isinstance(track, str) or track not in ACCELERATION_LIMITS:
         raise config_error("track", track, f"must be one of {', '.join(ACCELERATION_LIMITS)}")
     return ACCELERATION_LIMITS[track]
 

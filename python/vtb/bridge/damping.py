@@ -46,7 +46,7 @@ def _span(span) -> float:
 
 
 def _kind(kind) -> str:
-    if kind not in BRIDGE_TYPES:
+    if not isinstance(kind, str) or kind not in BRIDGE_TYPES:
         raise config_error("bridge_type", kind, f"must be one of {', '.join(BRIDGE_TYPES)} (EN 1991-2 Table 6.6)")
     return kind
 
@@ -115,10 +115,16 @@ def code_rayleigh(ratio: float, f_low: float, f_high: float) -> RayleighRatio:
 def achieved_ratios(damping: RayleighRatio, frequencies: Sequence[float]) -> np.ndarray:
     """The ratio (−) Rayleigh damping gives at each frequency (Hz): α/(2ω) + βω/2, with α and β
     those that give ``damping.ratio`` at ``damping.f1`` and ``damping.f2``."""
+    try:
+        f = np.asarray(frequencies, dtype=float)
+    except (TypeError, ValueError):
+        f = None
+    if f is None or f.ndim != 1 or not (np.isfinite(f) & (f > 0)).all():
+        raise config_error("frequencies", frequencies, "must be a list of frequencies (Hz) > 0")
     w1, w2 = 2 * math.pi * damping.f1, 2 * math.pi * damping.f2
     alpha = 2 * damping.ratio * w1 * w2 / (w1 + w2)
     beta = 2 * damping.ratio / (w1 + w2)
-    w = 2 * math.pi * np.asarray(frequencies, dtype=float)
+    w = 2 * math.pi * f
     return alpha / (2 * w) + beta * w / 2
 
 

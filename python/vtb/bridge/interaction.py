@@ -15,6 +15,7 @@ x = 0 (``solver.edge_step``, unless the configuration hands the wheels over on a
 
 from __future__ import annotations
 
+import math
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
@@ -33,8 +34,12 @@ def with_vehicles(config: Config, name: str, gap: float = 1.0, tail: float = 0.5
     unit) as vehicles, its leading wheelset ``gap`` m before the structure at t = 0, on
     ``irregularity`` (default a smooth rail), recording ``tail`` s after the last wheel has
     left; no moving forces."""
-    if name not in library_trains():
+    if not isinstance(name, str) or name not in library_trains():
         raise config_error("trains", name, f"unknown train for the interaction scan (the library's: {sorted(library_trains())})")
+    if isinstance(tail, bool) or not isinstance(tail, (int, float)) or not math.isfinite(tail) or tail < 0:
+        raise config_error("tail", tail, "must be a duration (s) >= 0")
+    if irregularity is not None and not isinstance(irregularity, Irregularity):
+        raise config_error("irregularity", irregularity, "must be a vtb.Irregularity, or None for a smooth rail")
     out = config.copy()
     out.forces = []
     out.vehicles = library_train(name, cars=cars, x_front=-_positive("gap", gap))
@@ -56,9 +61,9 @@ def interaction_scan(config: Config, trains: Sequence[str], speeds: Sequence[flo
     (default a smooth rail). ``band``, ``tail``, ``gap``, ``out``, ``executor``, ``threads``:
     as :func:`~vtb.bridge.scan.speed_scan`; the journals are ``{train}__{bound}.csv`` in
     ``out``."""
+    if isinstance(trains, str) or not isinstance(trains, Sequence) or not trains:
+        raise config_error("trains", trains, "needs a list of at least one train of the library")
     names = list(trains)
-    if not names:
-        raise config_error("trains", trains, "needs at least one train of the library")
     grid, bounds, base, directory = scan_inputs(config, speeds, mass_bounds, band, out)
     runs = [(name, bound, with_vehicles(with_mass(base, factor), name, gap, tail, cars, irregularity))
             for bound, factor in bounds.items() for name in names]

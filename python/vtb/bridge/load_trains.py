@@ -54,6 +54,9 @@ ARTICULATION = -1.7625
 HSLM_SOURCE = ("EN 1991-2:2003 §6.4.6.1.1, Table 6.3 and Fig. 6.12 (Annex E): HSLM-A{i}, N = {n} coaches of "
                "D = {D:g} m, bogie axle spacing d = {d:g} m, P = {P:g} kN")
 HSLM_B_LOAD = 170e3
+#: Most axles a load train may have: a 2 km freight train has some 300; the limit keeps a
+#: mistyped count (HSLM-B's n, a user's table) from building a table for minutes.
+MAX_AXLES = 10_000
 GRAVITY = float(properties("SolverConfig")["gravity"]["default"])
 
 
@@ -83,6 +86,23 @@ class LoadTrain:
     spacing: Optional[float] = None
     title: str = field(default="", compare=False)
 
+    def __post_init__(self):
+        # a user's table is checked as a CSV file's rows are: a bad axle fails here, not as a
+        # NaN or a TypeError deep in a scan
+        positions, loads = _axles("positions", self.positions), _axles("loads", self.loads)
+        if not positions:
+            raise config_error("positions", self.positions, "a load train needs at least one axle")
+        if len(loads) != len(positions):
+            raise config_error("loads", self.loads, f"needs one load per position ({len(positions)})")
+        if any(b < a for a, b in zip(positions, positions[1:])):
+            raise config_error("positions", self.positions, "positions must increase from the first axle to the last")
+        if any(p <= 0 for p in loads):
+            raise config_error("loads", self.loads, "axle loads (N) must be > 0")
+        if self.spacing is not None:
+            _finite_number("spacing", self.spacing, "must be a length (m) > 0", positive=True)
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "loads", loads)
+
     @property
     def length(self) -> float:
         """Distance (m) from the first to the last axle."""
@@ -97,9 +117,33 @@ class LoadTrain:
         """The axles as :class:`vtb.MovingForce` s, the first at ``x_front`` (m) and the others
         behind it, each carrying ``share`` of its axle load (N): 1 when the structure is the
         whole deck under one track, 1/2 when it models one of two rails (``Vehicle.rails``)."""
-        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 < share <= 1:
-            raise config_error("share", share, "must be a fraction of the axle load in (0, 1]")
+        check_share(share)
+        _finite_number("x_front", x_front, "must be a position (m)")
+        if layer is not None and not isinstance(layer, str):
+            raise config_error("layer", layer, "must be a layer's name, or None for the top layer")
         return [MovingForce(float(p) * share, float(x_front) - float(x), layer) for x, p in zip(self.positions, self.loads)]
+
+
+def _finite_number(name: str, v, why: str, positive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v) or (positive and v <= 0):
+        raise config_error(name, v, why)
+    return float(v)
+
+
+def _axles(name: str, values) -> tuple:
+    """``values`` as a tuple of finite floats, or a ConfigError naming ``name``."""
+    if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__len__"):
+        raise config_error(name, values, "expected a sequence of numbers, one per axle")
+    if len(values) > MAX_AXLES:
+        raise config_error(name, f"{len(values)} axles", f"a load train has at most {MAX_AXLES} axles")
+    return tuple(_finite_number(f"{name}[{i}]", v, "must be a finite number") for i, v in enumerate(values))
+
+
+def check_share(share) -> float:
+    """``share`` of an axle load on the modelled track, in (0, 1], or a ConfigError."""
+    if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 < share <= 1:
+        raise config_error("share", share, "must be a fraction of the axle load in (0, 1]")
+    return float(share)
 
 
 def hslm_a(i: int) -> LoadTrain:
@@ -124,8 +168,8 @@ def hslm_a(i: int) -> LoadTrain:
 def hslm_b(n: int, d: float) -> LoadTrain:
     """HSLM-B of EN 1991-2 §6.4.6.1.1: ``n`` point forces of 170 kN at a uniform spacing ``d``
     (m), both read by the user from Fig. 6.13 for the span L (< 7 m) under check."""
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise config_error("n", n, "HSLM-B needs its number of forces N (a whole number >= 1, from EN 1991-2 Fig. 6.13)")
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_AXLES:
+        raise config_error("n", n, f"HSLM-B needs its number of forces N (a whole number from 1 to {MAX_AXLES}, from EN 1991-2 Fig. 6.13)")
     if isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d) or d <= 0:
         raise config_error("d", d, "HSLM-B needs its force spacing d (m > 0, from EN 1991-2 Fig. 6.13)")
     return LoadTrain("HSLM-B", tuple(k * float(d) for k in range(n)), (HSLM_B_LOAD,) * n,
@@ -232,6 +276,8 @@ def apply_load_train(config: Config, train: Union[str, LoadTrain], share: float 
     t = load_train(train)
     if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not math.isfinite(gap) or gap < 0:
         raise config_error("gap", gap, "must be a distance (m) >= 0")
+    if tail is not None and (_finite_number("tail", tail, "must be a duration (s) >= 0") < 0):
+        raise config_error("tail", tail, "must be a duration (s) >= 0")
     out = config.copy()
     out.vehicles = []
     out.forces = t.forces(-float(gap), layer, share)
@@ -243,4 +289,8 @@ def apply_load_train(config: Config, train: Union[str, LoadTrain], share: float 
 def resonant_speeds(frequency: float, spacing: float, v_max: float, orders: Sequence[int] = range(1, 11)) -> list:
     """The resonant speeds v_i = n0·D/i (m/s) up to ``v_max``: the i-th is the speed at which
     the axle groups D (m) apart pass every i periods of the frequency n0 (Hz)."""
+    for name, v in (("frequency", frequency), ("spacing", spacing), ("v_max", v_max)):
+        _finite_number(name, v, "must be a finite number > 0", positive=True)
+    if isinstance(orders, (str, bytes)) or not all(isinstance(i, int) and not isinstance(i, bool) and i >= 1 for i in orders):
+        raise config_error("orders", orders, "must be whole numbers >= 1")
     return [frequency * spacing / i for i in orders if frequency * spacing / i <= v_max]

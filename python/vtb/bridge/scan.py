@@ -25,7 +25,7 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from ..config.fields import Config
-from ..errors import config_error, make_folder
+from ..errors import check_folder, config_error, make_folder
 from ..run.tables import frame, to_parquet
 from ..studies.grid import study
 from .load_trains import LoadTrain, apply_load_train, load_train
@@ -40,10 +40,50 @@ POINT_INDICES = ("deck_acc_max_p{j}", "deck_disp_max_p{j}", "deck_moment_max_p{j
 SPAN_FRACTIONS = (0.25, 0.5, 0.75)
 
 
+#: Most speeds of a scan: 10 000 steps of 0.1 km/h cover 0 to 1000 km/h; more is a mistyped
+#: step or line speed, refused before a list of billions of speeds is built.
+MAX_SPEEDS = 10_000
+
+
 def _positive(name: str, v) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not math.isfinite(v) or v <= 0:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v) or v <= 0:
         raise config_error(name, v, "must be a finite number > 0")
     return float(v)
+
+
+def speed_grid(speeds) -> list:
+    """``speeds`` (a number or a list of them, m/s) as a list of floats > 0, or a ConfigError."""
+    try:
+        grid = np.atleast_1d(np.asarray(speeds, dtype=float))
+    except (TypeError, ValueError):
+        raise config_error("speeds", speeds, "must be a list of speeds (m/s)") from None
+    if grid.ndim != 1 or not 1 <= grid.size <= MAX_SPEEDS:
+        raise config_error("speeds", speeds, f"must be a flat list of 1 to {MAX_SPEEDS} speeds (m/s)")
+    for i, v in enumerate(grid):
+        _positive(f"speeds[{i}]", v)
+    return [float(v) for v in grid]
+
+
+def mass_factors(mass_bounds) -> dict:
+    """``mass_bounds`` (None: nominal only) as a dict name → factor > 0, or a ConfigError."""
+    if mass_bounds is None:
+        return {"nominal": 1.0}
+    if not isinstance(mass_bounds, Mapping) or not mass_bounds:
+        raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
+    for k, v in mass_bounds.items():
+        if not isinstance(k, str) or not k.strip():
+            raise config_error("mass_bounds", k, "a bound's name must be a non-empty text")
+        _positive(f"mass_bounds.{k}", v)
+    return dict(mass_bounds)
+
+
+def out_folder(out) -> Optional[Path]:
+    """``out`` (a folder's path, or None) checked before any run (:func:`vtb.errors.check_folder`)."""
+    if out is None:
+        return None
+    if not isinstance(out, (str, Path)):
+        raise config_error("out", out, "must be a folder's path")
+    return check_folder(out, "out")
 
 
 def scan_speeds(v_min: float, v_max: float, step: float = MAX_STEP, resonances: Sequence[float] = (),
@@ -58,6 +98,14 @@ def scan_speeds(v_min: float, v_max: float, step: float = MAX_STEP, resonances: 
         raise config_error("step", step, f"must be at most {MAX_STEP:.4g} m/s (10 km/h, EN 1991-2 §6.4.6.2)")
     fine = _positive("fine_step", fine_step) if fine_step is not None else st / 5
     width = _positive("fine_width", fine_width) if fine_width is not None else 2 * st
+    if (hi - lo) / st > MAX_SPEEDS:
+        raise config_error("step", step, f"makes more than {MAX_SPEEDS} speeds from {v_min:g} to {v_max:g} m/s")
+    if (isinstance(resonances, (str, bytes)) or not hasattr(resonances, "__iter__")
+            or not all(isinstance(r, (int, float)) and not isinstance(r, bool) and math.isfinite(r) for r in resonances)):
+        raise config_error("resonances", resonances, "must be a list of speeds (m/s)")
+    resonances = list(resonances)
+    if len(resonances) * (2 * width / fine + 1) > MAX_SPEEDS:
+        raise config_error("fine_step", fine_step, f"makes more than {MAX_SPEEDS} speeds around the {len(resonances)} resonances")
     n = int(math.floor((hi - lo) / st + 1e-9))
     speeds = [lo + i * st for i in range(n + 1)] + [hi]
     for r in resonances:
@@ -74,6 +122,7 @@ def deck_indices(config: Config) -> tuple:
     acceleration low-passed at ``output.deck_band``) when the structure has several layers, else
     the single layer's (``{layer}_acc_max`` low-passed at ``output.band_limit``,
     ``{layer}_disp_max``, and ``deck_moment_max``, which is the bottom layer's, its own)."""
+    _deck(config)
     if len(config.structure.layers) > 1:
         return DECK_INDICES
     name = config.structure.layers[0].name
@@ -84,6 +133,9 @@ def point_indices(config: Config) -> Optional[tuple]:
     """The (acceleration, deflection, bending moment) index names of the deck at every
     observation point of ``config`` (three lists), or None when it has one point or a single
     layer."""
+    _deck(config)
+    if not isinstance(config.output.points, (list, tuple)):
+        raise config_error("output.points", config.output.points, "must be a list of positions (m)")
     n = len(config.output.points)
     if len(config.structure.layers) < 2 or n < 2:
         return None
@@ -94,8 +146,11 @@ def span_points(config: Config) -> list:
     """The quarter, middle and three-quarter points (m) of every span of ``config``'s deck (its
     bottom layer): the deck is cut at its ``joints`` into girders, and each girder spans between
     its supports (discrete couplings to the ground) in it — the whole girder without two."""
-    deck = config.structure.layers[-1]
-    length = float(config.structure.length)
+    deck = _deck(config)
+    length = _positive("structure.length", config.structure.length)
+    if not isinstance(deck.joints, (list, tuple)) or not all(isinstance(j, (int, float)) and 0 < j < length for j in deck.joints):
+        raise config_error(f"structure.layers[{len(config.structure.layers) - 1}].joints", deck.joints,
+                           f"must be a list of positions (m) within the structure, 0 < x < {length:g}")
     cuts = [0.0] + sorted(float(j) for j in deck.joints) + [length]
     supports = sorted(float(x) for c in config.structure.couplings if c.upper == deck.name and c.lower == "ground"
                       and c.kind == "discrete" for x in c.positions)
@@ -108,11 +163,19 @@ def span_points(config: Config) -> list:
     return out
 
 
+def _deck(config: Config):
+    """The deck (bottom layer) of ``config``, or a ConfigError when it has no layer."""
+    if not isinstance(config.structure.layers, list) or not config.structure.layers:
+        raise config_error("structure.layers", config.structure.layers, "a bridge needs a deck: at least one layer")
+    return config.structure.layers[-1]
+
+
 def with_band(config: Config, band: float) -> Config:
     """``config`` whose deck acceleration is low-passed at ``band`` (Hz): ``output.deck_band``,
     and for a single layer ``output.band_limit`` too."""
+    band = _positive("band", band)
     out = config.copy()
-    out.output.deck_band = float(band)
+    out.output.deck_band = band
     if len(out.structure.layers) == 1:
         out.output.band_limit = float(band)
     return out
@@ -121,8 +184,9 @@ def with_band(config: Config, band: float) -> Config:
 def with_mass(config: Config, factor: float) -> Config:
     """``config`` whose deck (bottom layer) is ``factor`` times as heavy (its density scaled;
     its stiffness kept): a bound of the deck's mass (ballast density and depth)."""
+    factor = _positive("mass_bounds", factor)
     out = config.copy()
-    out.structure.layers[-1].density *= _positive("mass_bounds", factor)
+    _deck(out).density *= factor
     return out
 
 
@@ -202,9 +266,9 @@ def speed_scan(config: Config, trains: Sequence[Union[str, LoadTrain]], speeds: 
     unloaded, and each axle enters over the first support). ``out``: a directory; each (train, bound) study journals there as it runs
     (``{train}__{bound}.csv``) and a re-run resumes it. ``executor``/``threads``: as
     :func:`vtb.study` (Dask's client's executor included)."""
+    if isinstance(trains, (str, LoadTrain)) or not isinstance(trains, Sequence) or not trains:
+        raise config_error("trains", trains, "needs a list of at least one load train")
     loads = [load_train(t) for t in trains]
-    if not loads:
-        raise config_error("trains", trains, "needs at least one load train")
     grid, bounds, base, directory = scan_inputs(config, speeds, mass_bounds, band, out)
     runs = []
     for bound, factor in bounds.items():
@@ -218,14 +282,9 @@ def scan_inputs(config: Config, speeds, mass_bounds, band, out) -> tuple:
     """A scan's checked inputs: the speeds (m/s, each positive), the mass bounds (default
     ``{"nominal": 1.0}``), the configuration low-passed at ``band`` (default its deck band) and
     the journals' directory (or None)."""
-    grid = [float(v) for v in np.atleast_1d(np.asarray(speeds, dtype=float))]
-    for i, v in enumerate(grid):
-        _positive(f"speeds[{i}]", v)
-    bounds = dict(mass_bounds or {"nominal": 1.0})
-    if not bounds:
-        raise config_error("mass_bounds", mass_bounds, "needs at least one bound (name → factor on the deck's density)")
+    grid, bounds = speed_grid(speeds), mass_factors(mass_bounds)
     base = with_band(config, band if band is not None else config.output.deck_band)
-    return grid, bounds, base, Path(out) if out is not None else None
+    return grid, bounds, base, out_folder(out)
 
 
 def run_scan(runs: Sequence[tuple], speeds: Sequence[float], directory: Optional[Path], executor: Optional[Executor] = None,

@@ -17,7 +17,7 @@ from ..config.trains import trains as library_trains
 from ..errors import config_error
 from .checks import ACCELERATION_LIMITS
 from .damping import BRIDGE_TYPES
-from .scan import MAX_STEP
+from .scan import MAX_SPEEDS, MAX_STEP
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -113,9 +113,9 @@ class BridgeCheck(StrictFields):
             if getattr(self, name) is not None:
                 _number(f"bridge_check.{name}", getattr(self, name), positive=True)
         _number("bridge_check.tail", self.tail, positive=False)
-        if self.bridge_type not in BRIDGE_TYPES:
+        if not isinstance(self.bridge_type, str) or self.bridge_type not in BRIDGE_TYPES:
             raise config_error("bridge_check.bridge_type", self.bridge_type, f"must be one of {', '.join(BRIDGE_TYPES)} (EN 1991-2 Table 6.6)")
-        if self.track not in ACCELERATION_LIMITS:
+        if not isinstance(self.track, str) or self.track not in ACCELERATION_LIMITS:
             raise config_error("bridge_check.track", self.track, f"must be one of {', '.join(ACCELERATION_LIMITS)}")
         if self.maintenance not in ("careful", "standard"):
             raise config_error("bridge_check.maintenance", self.maintenance, "must be \"careful\" (Φ2) or \"standard\" (Φ3)")
@@ -125,6 +125,10 @@ class BridgeCheck(StrictFields):
             raise config_error("bridge_check.share", self.share, "is a share of the axle load: at most 1")
         if self.v_min >= 1.2 * self.line_speed:
             raise config_error("bridge_check.v_min", self.v_min, f"must lie below 1.2 × line_speed = {1.2 * self.line_speed:g} m/s")
+        if (1.2 * self.line_speed - self.v_min) / self.step > MAX_SPEEDS:  # too many speeds even at 10 km/h: the line speed is wrong
+            wrong = "line_speed" if (1.2 * self.line_speed - self.v_min) / MAX_STEP > MAX_SPEEDS else "step"
+            raise config_error(f"bridge_check.{wrong}", getattr(self, wrong),
+                               f"makes more than {MAX_SPEEDS} speeds from v_min to 1.2 × line_speed at steps of {self.step:g} m/s")
         if not isinstance(self.trains, (list, tuple)) or not self.trains or not all(isinstance(t, str) for t in self.trains):
             raise config_error("bridge_check.trains", self.trains, "must be a non-empty list of train names or CSV paths")
         known = library_trains()

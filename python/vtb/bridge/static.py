@@ -23,7 +23,7 @@ from ..analysis.eigen import assemble, layer_index, shape_matrix, spd_solver
 from ..analysis.track import modes
 from ..config.fields import Config
 from ..errors import config_error
-from .load_trains import LoadTrain
+from .load_trains import LoadTrain, check_share, load_train
 
 #: LM71 of EN 1991-2 §6.3.2 (Fig. 6.2): four 250 kN axles 1.6 m apart and 80 kN/m beyond
 #: 0.8 m from the outer axles on either side, over any length where it is unfavourable.
@@ -31,6 +31,9 @@ LM71_AXLES = (-2.4, -0.8, 0.8, 2.4)
 LM71_AXLE_LOAD = 250e3
 LM71_LINE_LOAD = 80e3
 LM71_CLEAR = 3.2
+#: Most samples of an influence line (a 100 km structure every 0.1 m): a mistyped dx is
+#: refused instead of allocating for ever.
+MAX_SAMPLES = 1_000_000
 
 
 #: What an influence line gives: the deck's deflection (m per N) or its bending moment (N·m per N).
@@ -55,6 +58,8 @@ class InfluenceLine:
         """The largest static effect (m or N·m) of the train over every position of its front
         axle (every ``dx``, entering to leaving, and each axle on ``point``, where the peak of a
         line with a kink lies): max Σ P_k·G(x_front − x_k)."""
+        train = load_train(train)
+        share = check_share(share)
         pos = np.asarray(train.positions)
         loads = np.asarray(train.loads) * share
         fronts = np.arange(self.x[0], self.x[-1] + train.length + self.dx, self.dx)
@@ -67,6 +72,9 @@ class InfluenceLine:
         """The largest static effect (m or N·m) under LM71 × ``alpha``: the axle group at every
         position (each axle on ``point`` among them), and the line load wherever G > 0 beyond
         3.2 m from the group's centre."""
+        share = check_share(share)
+        if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not math.isfinite(alpha) or alpha <= 0:
+            raise config_error("alpha", alpha, "LM71's classification factor must be a finite number > 0")
         positive = np.clip(self.g, 0.0, None)
         cum = np.concatenate(([0.0], np.cumsum(0.5 * (positive[1:] + positive[:-1]) * np.diff(self.x))))
         best = 0.0
@@ -83,16 +91,18 @@ def influence_line(config: Config, point: Optional[float] = None, layer: Optiona
     """The influence line of the deck's (bottom layer's) static ``quantity`` — ``"deflection"``
     or ``"moment"`` (bending moment) — at ``point`` (m; default the first observation point) for
     a force on ``layer`` (default: the top layer, where moving forces act)."""
-    system = assemble(config)
     length = float(config.structure.length)
     if point is None:
         point = config.output.points[0] if config.output.points else length / 2
-    if not (isinstance(point, (int, float)) and 0 <= point <= length):
+    if isinstance(point, bool) or not (isinstance(point, (int, float)) and 0 <= point <= length):
         raise config_error("point", point, f"must lie on the structure, 0 ≤ x ≤ {length:g} m")
-    if not (isinstance(dx, (int, float)) and 0 < dx <= length):
+    if isinstance(dx, bool) or not (isinstance(dx, (int, float)) and 0 < dx <= length):
         raise config_error("dx", dx, "must be a step (m) > 0")
     if quantity not in QUANTITIES:
         raise config_error("quantity", quantity, f"must be one of {', '.join(QUANTITIES)}")
+    if length / dx > MAX_SAMPLES:
+        raise config_error("dx", dx, f"samples the {length:g} m structure at more than {MAX_SAMPLES} points")
+    system = assemble(config)
     top = layer_index(system, layer if layer is not None else 0, "layer")
     deck = len(system.layers) - 1
     at = shape_matrix(system, deck, np.array([float(point)]), moment=quantity == "moment")
@@ -107,6 +117,11 @@ def deck_frequencies(config: Config, fmax: float = 120.0, share: float = 0.5, cl
     """The deck's distinct natural frequencies (Hz) below ``fmax``: the structure's modes whose
     kinetic energy lies mostly (> ``share``) in the bottom layer, the near-equal ones of
     identical spans (within ``cluster``, relative) counted once, at the lowest of each group."""
+    for name, v, ok in (("fmax", fmax, lambda x: 0 < x < math.inf), ("share", share, lambda x: 0 <= x < 1),
+                        ("cluster", cluster, lambda x: 0 <= x < math.inf)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v):
+            raise config_error(name, v, {"fmax": "must be a frequency (Hz) > 0", "share": "must be a fraction of the kinetic energy in [0, 1)",
+                                         "cluster": "must be a relative tolerance >= 0"}[name])
     system = assemble(config)
     found = modes(config, fmax)
     _, first, count = system.layers[-1]
