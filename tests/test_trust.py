@@ -361,3 +361,17 @@ def test_a_section_given_as_a_table_is_refused_naming_it():
         with pytest.raises(ConfigError) as e:
             vtb.simulate(cfg, progress=False)
         assert e.value.field == section
+
+
+def test_a_thread_count_beyond_any_machine_is_refused_before_work():
+    """`threads=10**6` started thousands of worker threads before anything failed (the bridge
+    fuzzer's find); now every door that takes a thread count refuses it at once, naming it."""
+    from vtb.config.args import MAX_THREADS
+
+    cfg = small_config()
+    for call in (lambda t: vtb.simulate_batch([cfg], threads=t), lambda t: vtb.study(cfg, {"speed": [50.0]}, threads=t, progress=False)):
+        for bad in (10**6, MAX_THREADS + 1, 0, "2", 2.0):
+            start = time.perf_counter()
+            with pytest.raises(ConfigError) as e:
+                call(bad)
+            assert e.value.field == "threads" and time.perf_counter() - start < 1.0

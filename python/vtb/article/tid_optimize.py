@@ -157,7 +157,7 @@ def optimize(
     check_budget(pop_size, n_gen, seed, algorithm)
     if not isinstance(config, Config):
         raise config_error("config", type(config).__name__, "expected a vtb.Config")
-    args.whole("threads", threads, 1, none=True)
+    args.threads(threads)
     checkpoint_path = args.path("checkpoint", checkpoint, none=True)
     if checkpoint_path is not None:
         check_folder(checkpoint_path.parent, "checkpoint")  # before any run

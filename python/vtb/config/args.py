@@ -11,6 +11,16 @@ import os
 from typing import Optional
 
 
+#: Most worker threads a run or study may ask for: more than the largest machines' cores only
+#: multiplies threads (a mistyped 10**6 started thousands before failing).
+MAX_THREADS = 1024
+
+
+def threads(v):
+    """A ``threads`` argument: None (all cores) or a whole number from 1 to :data:`MAX_THREADS`."""
+    return whole("threads", v, 1, MAX_THREADS, none=True)
+
+
 def whole(name: str, v, low: int = 0, high: Optional[int] = None, none: bool = False):
     """``v`` as an int within [low, high] (``None`` allowed with ``none``)."""
     from ..errors import config_error

@@ -14,7 +14,7 @@ import numpy as np
 from .. import _core
 from ..analysis.comfort import iso2631, sperling
 from ..analysis.spectra import psd, third_octave, welch_third_octave
-from ..config import gateway
+from ..config import args, gateway
 from ..config.fields import Config, structure_json
 from ..config.prepare import prepare
 from ..config.resolution import warn_beyond
@@ -390,7 +390,7 @@ def simulate_batch(
     result is bit for bit the one it gives alone, a failing job leaves its group running, and
     without ``histories`` a job keeps only the series its metrics need.
 
-    ``threads``: worker threads (default: all cores). ``progress``: ``True`` for a tqdm bar,
+    ``threads``: worker threads (default: all cores; at most :data:`vtb.config.args.MAX_THREADS`). ``progress``: ``True`` for a tqdm bar,
     or a callable ``f(done)``. ``on_error``: ``"raise"`` raises the first failure,
     ``"return"`` puts the exception object in its place and continues. Configurations that
     share an irregularity sample share one generated profile (:func:`irregularity_profile`). Ctrl-C interrupts the
@@ -405,6 +405,7 @@ def simulate_batch(
         raise config_error("on_error", on_error, "must be \"raise\" or \"return\"")
     if lanes is not None and (not isinstance(lanes, int) or isinstance(lanes, bool) or lanes not in (1, 2, 4, 8)):
         raise config_error("lanes", lanes, "must be 1, 2, 4 or 8")
+    threads = args.threads(threads)
     results: list = [None] * len(configs)
     jsons, profile_index, profiles, order = _prepare_all(configs, on_error, results)
     bar, callback = None, None

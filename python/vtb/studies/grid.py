@@ -332,7 +332,7 @@ def study(
     drops when its holder dies).
     """
     out = args.path("out", out, none=True)
-    threads = args.whole("threads", threads, 1, none=True)
+    threads = args.threads(threads)
     chunk = args.whole("chunk", chunk, 1, none=True)
     if not (isinstance(progress, bool) or callable(progress)):
         raise config_error("progress", progress, "must be True, False or a callable f(done, total)")
