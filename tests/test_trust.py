@@ -375,3 +375,11 @@ def test_a_thread_count_beyond_any_machine_is_refused_before_work():
             with pytest.raises(ConfigError) as e:
                 call(bad)
             assert e.value.field == "threads" and time.perf_counter() - start < 1.0
+
+
+def test_an_optimisation_reference_that_is_not_a_mapping_is_refused_naming_it():
+    """`optimize(..., reference="tids")` met an AttributeError (the long fuzz run's find)."""
+    with pytest.raises(ConfigError) as e:
+        vtb.optimize(small_config(), variables={"tids.stiffness": (1e7, 1e9, "log")}, objectives=["rail_acc_rms"],
+                     constraints=[("rail_acc_max", "reference")], reference="tids", pop_size=4, n_gen=1, seed=0, progress=False)
+    assert e.value.field == "reference"

@@ -25,6 +25,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..config import args
 from ..config.fields import Config
 from ..errors import config_error, make_folder, stale_file_error, writing
 from ..optim import Problem, minimize, saved_identity
@@ -292,7 +293,7 @@ def _problem_spec(config: Config, variables, objectives, constraints, reference)
             raise config_error("constraints", c, "the bound must be a finite number or 'reference'")
         cons.append((c[0], c[1]))
     ref = None
-    if reference is not None:
+    if args.mapping("reference", reference, none=True) is not None:
         cfg = config.copy()
         for path, value in reference.items():
             set_field(cfg, path, value)
