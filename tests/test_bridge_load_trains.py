@@ -129,3 +129,14 @@ def test_resonant_speeds_refuse_bad_input(args, orders, field):
     with pytest.raises(vtb.ConfigError) as e:
         resonant_speeds(*args, orders=orders)  # order 0 was a ZeroDivisionError, a list a TypeError
     assert e.value.field == field
+
+
+def test_deck_frequencies_refuse_an_absurd_search_band():
+    """`deck_frequencies(fmax=1e300)` overflowed in the eigensolver's shift (the long fuzz run's
+    find, seed 2)."""
+    from fuzz_bridge import beam
+    from vtb.bridge.static import deck_frequencies
+
+    with pytest.raises(vtb.ConfigError) as e:
+        deck_frequencies(beam(), fmax=1e300)
+    assert e.value.field == "fmax"

@@ -34,6 +34,9 @@ LM71_CLEAR = 3.2
 #: Most samples of an influence line (a 100 km structure every 0.1 m): a mistyped dx is
 #: refused instead of allocating for ever.
 MAX_SAMPLES = 1_000_000
+#: Highest frequency (Hz) a deck's modes are sought to: far above any bridge check's band (and
+#: the eigensolver's shift overflows near 1e300).
+MAX_FREQUENCY = 1e5
 
 
 #: What an influence line gives: the deck's deflection (m per N) or its bending moment (N·m per N).
@@ -117,10 +120,10 @@ def deck_frequencies(config: Config, fmax: float = 120.0, share: float = 0.5, cl
     """The deck's distinct natural frequencies (Hz) below ``fmax``: the structure's modes whose
     kinetic energy lies mostly (> ``share``) in the bottom layer, the near-equal ones of
     identical spans (within ``cluster``, relative) counted once, at the lowest of each group."""
-    for name, v, ok in (("fmax", fmax, lambda x: 0 < x < math.inf), ("share", share, lambda x: 0 <= x < 1),
+    for name, v, ok in (("fmax", fmax, lambda x: 0 < x <= MAX_FREQUENCY), ("share", share, lambda x: 0 <= x < 1),
                         ("cluster", cluster, lambda x: 0 <= x < math.inf)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v):
-            raise config_error(name, v, {"fmax": "must be a frequency (Hz) > 0", "share": "must be a fraction of the kinetic energy in [0, 1)",
+            raise config_error(name, v, {"fmax": f"must be a frequency (Hz) > 0 and at most {MAX_FREQUENCY:g}", "share": "must be a fraction of the kinetic energy in [0, 1)",
                                          "cluster": "must be a relative tolerance >= 0"}[name])
     system = assemble(config)
     found = modes(config, fmax)
