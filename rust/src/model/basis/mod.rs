@@ -73,29 +73,7 @@ impl LayerBasis {
     /// length `shape_len()`; it is overwritten without allocating.
     #[inline]
     pub fn eval(&self, x: f64, out: &mut Shape) {
-        match self {
-            LayerBasis::Modal(b) => {
-                out.start = 0;
-                if (0.0..=b.length).contains(&x) {
-                    b.eval_into(x, &mut out.values);
-                } else {
-                    out.values.fill(0.0);
-                }
-            }
-            LayerBasis::Fem(b) if !b.covers(x) => {
-                out.start = 0;
-                out.values.fill(0.0);
-            }
-            LayerBasis::Fem(b) => {
-                let e = b.element_of(x);
-                let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
-                out.start = 2 * e;
-                let xi = x - a;
-                for (o, c) in out.values.iter_mut().zip(&interdependent(l, b.phi[e])[0]) {
-                    *o = c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]));
-                }
-            }
-        }
+        self.eval_derivative::<false>(x, out);
     }
 
     /// Curvature shape vector κ(x): w″ of the basis functions (ψ′ of a Timoshenko element,
@@ -103,13 +81,21 @@ impl LayerBasis {
     /// allocating. At a node it is the element's on the right, as `eval`.
     #[inline]
     pub fn eval_curvature(&self, x: f64, out: &mut Shape) {
+        self.eval_derivative::<true>(x, out);
+    }
+
+    /// `eval` or, with `CURVATURE`, `eval_curvature` (one body, compiled once for each).
+    #[inline]
+    fn eval_derivative<const CURVATURE: bool>(&self, x: f64, out: &mut Shape) {
         match self {
             LayerBasis::Modal(b) => {
                 out.start = 0;
-                if (0.0..=b.length).contains(&x) {
+                if !(0.0..=b.length).contains(&x) {
+                    out.values.fill(0.0);
+                } else if CURVATURE {
                     b.curvature_into(x, &mut out.values);
                 } else {
-                    out.values.fill(0.0);
+                    b.eval_into(x, &mut out.values);
                 }
             }
             LayerBasis::Fem(b) if !b.covers(x) => {
@@ -121,8 +107,13 @@ impl LayerBasis {
                 let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
                 out.start = 2 * e;
                 let xi = x - a;
-                for (o, c) in out.values.iter_mut().zip(&interdependent(l, b.phi[e])[1]) {
-                    *o = c[1] + xi * (2.0 * c[2] + xi * 3.0 * c[3]);
+                let coeffs = interdependent(l, b.phi[e]);
+                for (o, c) in out.values.iter_mut().zip(&coeffs[usize::from(CURVATURE)]) {
+                    *o = if CURVATURE {
+                        c[1] + xi * (2.0 * c[2] + xi * 3.0 * c[3])
+                    } else {
+                        c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]))
+                    };
                 }
             }
         }

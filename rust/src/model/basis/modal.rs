@@ -108,19 +108,7 @@ impl ModalBasis {
     pub fn eval_into(&self, x: f64, out: &mut [f64]) {
         let l = self.length;
         let h = hermite_values(x, l);
-        let th = PI * x / l;
-        let (s1, c1) = th.sin_cos();
-        let two_c = 2.0 * c1;
-        let (mut prev, mut cur) = (0.0, s1);
-        let (mut p2, mut p4) = (0.0, 0.0);
-        for (n, v) in out[4..4 + self.n_sines].iter_mut().enumerate() {
-            *v = self.scale * cur;
-            p2 += self.proj[0][n] * cur;
-            p4 += self.proj[1][n] * cur;
-            let next = two_c * cur - prev;
-            prev = cur;
-            cur = next;
-        }
+        let (p2, p4) = self.sines_into::<false>(x, out);
         out[0] = 1.0 - x / l;
         out[1] = x / l;
         out[2] = (h[1] - p2) / self.mu[0];
@@ -135,24 +123,39 @@ impl ModalBasis {
         let s = x / l;
         // h2″ and h4″ of `hermite_values` (h2 = L(s − 2s² + s³), h4 = L(s³ − s²)).
         let (h2, h4) = ((6.0 * s - 4.0) / l, (6.0 * s - 2.0) / l);
-        let th = PI * x / l;
+        let (p2, p4) = self.sines_into::<true>(x, out);
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = (h2 + p2) / self.mu[0];
+        out[3] = (h4 + p4) / self.mu[1];
+    }
+
+    /// The sines (or with `CURVATURE` their second derivatives −k_n²·s_n) at x into
+    /// `out[4..]`, by the Chebyshev recurrence, and the two residuals' projections on them
+    /// (Σ proj·s_n, or Σ proj·k_n²·s_n).
+    #[inline(always)]
+    fn sines_into<const CURVATURE: bool>(&self, x: f64, out: &mut [f64]) -> (f64, f64) {
+        let th = PI * x / self.length;
         let (s1, c1) = th.sin_cos();
         let two_c = 2.0 * c1;
         let (mut prev, mut cur) = (0.0, s1);
         let (mut p2, mut p4) = (0.0, 0.0);
         for (n, v) in out[4..4 + self.n_sines].iter_mut().enumerate() {
-            let k2 = self.wavenumber(n + 1).powi(2);
-            *v = -k2 * self.scale * cur;
-            p2 += self.proj[0][n] * k2 * cur;
-            p4 += self.proj[1][n] * k2 * cur;
+            if CURVATURE {
+                let k2 = self.wavenumber(n + 1).powi(2);
+                *v = -k2 * self.scale * cur;
+                p2 += self.proj[0][n] * k2 * cur;
+                p4 += self.proj[1][n] * k2 * cur;
+            } else {
+                *v = self.scale * cur;
+                p2 += self.proj[0][n] * cur;
+                p4 += self.proj[1][n] * cur;
+            }
             let next = two_c * cur - prev;
             prev = cur;
             cur = next;
         }
-        out[0] = 0.0;
-        out[1] = 0.0;
-        out[2] = (h2 + p2) / self.mu[0];
-        out[3] = (h4 + p4) / self.mu[1];
+        (p2, p4)
     }
 
     /// ∫ N_a·N_bᵀ (`Derivative::Value`) or ∫ N_a″·N_b″ᵀ (`Curvature`) of two modal bases on
