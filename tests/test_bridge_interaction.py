@@ -155,3 +155,22 @@ def test_the_report_sets_the_interaction_beside_the_moving_loads(tmp_path):
     with pytest.raises(vtb.ConfigError) as e:
         vtb.bridge_check(_beam(), {**settings, "vehicles": ["HSLM-A1"]}, tmp_path / "bad", progress=False)
     assert e.value.field == "bridge_check.vehicles"
+
+
+# Findings of the fuzzer (tests/fuzz_bridge.py), each refused with the field named.
+
+@pytest.mark.parametrize("args, kwargs, field", [(([],), {}, "trains"),                     # was TypeError: unhashable type
+                                                 (("crh3",), {"tail": {"a": 1}}, "tail"),    # was TypeError from float()
+                                                 (("crh3",), {"irregularity": "smooth"}, "irregularity")])
+def test_with_vehicles_names_bad_arguments(args, kwargs, field):
+    with pytest.raises(vtb.ConfigError) as e:
+        with_vehicles(_beam(), *args, **kwargs)
+    assert e.value.field == field
+
+
+@pytest.mark.parametrize("kwargs, field", [({"out": 3}, "out"), ({"band": "true"}, "band"), ({"speeds": "60"}, "speeds")])
+def test_interaction_scan_names_bad_arguments(kwargs, field):
+    args = {"speeds": [60.0], **kwargs}
+    with pytest.raises(vtb.ConfigError) as e:
+        interaction_scan(_beam(), ["crh3"], args.pop("speeds"), progress=False, **args)  # out=3 was a TypeError from Path()
+    assert e.value.field == field

@@ -169,3 +169,56 @@ def test_scan_resumes_from_its_journals_and_runs_on_any_executor(tmp_path):
     assert upper["speed"][np.argmax(upper["acc"])] == 41.0          # n0·D/1.1 = 40.9 m/s
     lower = first.select(bound="lower")
     assert lower["speed"][np.argmax(lower["acc"])] == 45.0
+
+
+# Findings of the fuzzer (tests/fuzz_bridge.py), each refused with the field named, at once.
+
+@pytest.mark.parametrize("kwargs, field", [
+    ({"speeds": {"a": 60.0}}, "speeds"),             # was TypeError from float()
+    ({"speeds": [60.0, "x"]}, "speeds"),             # was ValueError from float()
+    ({"speeds": [[60.0, 70.0]]}, "speeds"),
+    ({"speeds": []}, "speeds"),
+    ({"mass_bounds": [1.0]}, "mass_bounds"),         # was TypeError from dict()
+    ({"mass_bounds": "x"}, "mass_bounds"),           # was ValueError from dict()
+    ({"mass_bounds": {None: 1.0}}, "mass_bounds"),
+    ({"band": "true"}, "band"),                      # was ValueError from float()
+    ({"out": 3}, "out"),                             # was TypeError from Path()
+    ({"trains": "HSLM-A1"}, "trains"),               # a name, not a list: was read letter by letter
+])
+def test_speed_scan_refuses_bad_arguments(kwargs, field):
+    args = {"trains": ["HSLM-A1"], "speeds": [60.0], **kwargs}
+    with pytest.raises(vtb.ConfigError) as e:
+        speed_scan(_beam(dt=2e-3), args.pop("trains"), args.pop("speeds"), progress=False, **args)
+    assert e.value.field == field
+
+
+def test_speed_scan_refuses_a_file_as_its_folder_before_running(tmp_path):
+    (tmp_path / "f").write_text("")
+    with pytest.raises(vtb.OutputError) as e:
+        speed_scan(_beam(dt=2e-3), ["HSLM-A1"], [60.0], out=tmp_path / "f", progress=False)
+    assert e.value.field == "out"
+
+
+@pytest.mark.parametrize("args, kwargs, field", [((11.1, 1e30), {}, "step"),                      # was a hang: 4·10^29 speeds
+                                                 ((11.1, 75.0), {"fine_step": 1e-12}, "fine_step"),
+                                                 ((11.1, 75.0), {"resonances": 72.0}, "resonances")])  # was TypeError
+def test_scan_speeds_refuse_too_many_speeds_at_once(args, kwargs, field):
+    import time
+    t0 = time.perf_counter()
+    with pytest.raises(vtb.ConfigError) as e:
+        scan_speeds(*args, resonances=kwargs.pop("resonances", [72.0]), **kwargs)
+    assert e.value.field == field and time.perf_counter() - t0 < 1.0
+
+
+@pytest.mark.parametrize("change, value, field", [("layers", [], "structure.layers"), ("length", "x", "structure.length"),
+                                                  ("joints", [1e9], "structure.layers[0].joints")])
+def test_span_points_name_a_bad_structure(change, value, field):
+    from vtb.bridge.scan import span_points
+    cfg = _beam(dt=2e-3)
+    if change == "joints":
+        cfg.structure.layers[-1].joints = value
+    else:
+        setattr(cfg.structure, change, value)  # no layers was an IndexError, a text length a ValueError
+    with pytest.raises(vtb.ConfigError) as e:
+        span_points(cfg)
+    assert e.value.field == field

@@ -53,7 +53,10 @@ def _positive(name: str, v) -> float:
 
 def speed_grid(speeds) -> list:
     """``speeds`` (a number or a list of them, m/s) as a list of floats > 0, or a ConfigError."""
+    texts = [speeds] if not isinstance(speeds, (list, tuple)) else speeds
     try:
+        if any(isinstance(v, (str, bytes, bool)) for v in texts):  # numpy would read "60" and True as numbers
+            raise TypeError
         grid = np.atleast_1d(np.asarray(speeds, dtype=float))
     except (TypeError, ValueError):
         raise config_error("speeds", speeds, "must be a list of speeds (m/s)") from None
