@@ -1,7 +1,8 @@
 """The long fuzz run: N generated bad inputs per public surface (tests/fuzz_surfaces.py: the
 older configuration surface of tests/fuzz_cases.py, trains, zones, spans, profile parts,
-damper groups, band levels, contact, edges, studies and optimisation) thrown at the API in
-worker processes, so that an abort or a hang is caught and counted instead of ending the run.
+damper groups, band levels, contact, edges, studies and optimisation, and the bridge
+engineer's surfaces of tests/fuzz_bridge.py: load trains, damping, scans, interaction, static,
+checks and bridge_check) thrown at the API in worker processes, so that an abort or a hang is caught and counted instead of ending the run.
 
     python benches/fuzz_config.py --cases 10000 [--surface all|config|trains|...] [--workers 2]
                                   [--timeout 10] [--seed 0]
@@ -9,7 +10,8 @@ worker processes, so that an abort or a hang is caught and counted instead of en
 Cases go round the surfaces chosen (``all``: every one, in turn). Prints a table per surface —
 cases, ok (a finite result), refused (a documented vtb error naming a usable field) and the
 findings: aborts (the worker process died), panics, hangs (no answer within --timeout s),
-non-vtb exceptions, errors naming no usable field, non-finite successes and mutated inputs —
+non-vtb exceptions, errors naming no usable field, non-finite successes, mutated inputs and
+slow refusals (a bad input refused after more than a second: its check came after work) —
 then the first cases of each finding. Exit status 1 when there is any finding.
 """
 

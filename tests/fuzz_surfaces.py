@@ -7,13 +7,16 @@ tests/fuzz_cases.py), ``trains``, ``zones``, ``spans``, ``profile`` (irregularit
 local defects), ``dampers`` (damper groups), ``bands`` (band levels, band limit, deck band),
 ``contact`` (the wheels' contact fields), ``edges`` (vehicles crossing a rail end, the
 hand-over, tails), ``studies`` (:func:`vtb.study`: grids, cases, references, indices, journals)
-and ``optimisation`` (:func:`vtb.optimize`). Every run is cheap: the small configuration runs
+and ``optimisation`` (:func:`vtb.optimize`), then the bridge engineer's surfaces of
+tests/fuzz_bridge.py (``load_trains``, ``damping``, ``scan``, ``interaction``, ``static``,
+``checks``, ``bridge_check``). Every run is cheap: the small configuration runs
 a few milliseconds of time.
 
 Verdicts: ``ok`` (a finite result), ``refused`` (a documented vtb error naming a usable field),
 and the findings: ``panic``, ``unnamed`` (an error naming no usable field), ``undocumented``
-(an exception that is not a vtb error), ``nonfinite`` (a success with a NaN or infinity) and
-``mutated`` (the call changed an input it was given). Aborts and hangs are counted by the
+(an exception that is not a vtb error), ``nonfinite`` (a success with a NaN or infinity),
+``mutated`` (the call changed an input it was given) and ``slow`` (a refusal after more than a
+second: the check came after work it should have preceded). Aborts and hangs are counted by the
 runner, which runs the cases in worker processes.
 """
 
