@@ -25,14 +25,29 @@ GRID = {"speed": [60.0, 70.0]}
 
 def _cases() -> dict:
     """A handful of cheap runs: the article's hybrid for 10 ms, a quarter car on a
-    finite-element rail, two moving forces on a modal beam."""
+    finite-element rail, two moving forces on a modal beam, and a moving force on the
+    synthesis of the converged track (one span, 1 kHz cut-off: a build of about 2 s)."""
     hybrid = small_config(0.01)
     qc = small_config(0.01, tids=False)
     qc.discretisation.method = "fem"
     qc.vehicles = [vtb.Vehicle.quarter_car(11000.0, 1200.0, 1.2e6, 3e4, x_front=30.0)]
     force = vtb.moving_load_config(20.0, 2500.0, 4.8, 3.5e10, 0.1, [vtb.MovingForce(1e5, 0.0), vtb.MovingForce(1e5, -3.0)], 50.0,
                                    points=[10.0], modes=10, dt=1e-3)
-    return {"article hybrid": hybrid, "quarter car on fem": qc, "moving forces": force}
+    fast = vtb.paper_config(model="fast", calibrated=True)
+    fast.structure.length = 32.0
+    for cp in fast.structure.couplings:
+        cp.positions = [x for x in cp.positions if x <= 32.0 + 1e-9] if cp.positions else cp.positions
+    fast.vehicles, fast.forces = [], [vtb.MovingForce(magnitude=70e3, x0=14.0)]
+    fast.solver.t_end, fast.output.points = 0.05, [15.0]
+    fast.discretisation.synthesis_cutoff = 1000.0
+    return {"article hybrid": hybrid, "quarter car on fem": qc, "moving forces": force, "moving force on the synthesis": fast}
+
+
+@pytest.fixture(autouse=True)
+def _own_cache(tmp_path, monkeypatch):
+    """The synthesis case builds its reduction in a cache of its own."""
+    from vtb.run import synthesis
+    monkeypatch.setenv(synthesis.CACHE_ENV, str(tmp_path / "cache"))
 
 
 def _indices() -> dict:
@@ -143,6 +158,12 @@ def test_a_checkpoint_and_its_designs_journal_are_refused_across_epochs_only(tmp
 
 
 if __name__ == "__main__":
+    import os
+    import tempfile
+
+    from vtb.run import synthesis
+
+    os.environ[synthesis.CACHE_ENV] = tempfile.mkdtemp()
     FINGERPRINT.parent.mkdir(exist_ok=True)
     FINGERPRINT.write_text(json.dumps({"epoch": vtb.RESULTS_EPOCH, "indices": _indices()}, indent=1, sort_keys=True) + "\n")
     print(f"wrote {FINGERPRINT} (results epoch {vtb.RESULTS_EPOCH})", file=sys.stderr)

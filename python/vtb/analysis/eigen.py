@@ -214,9 +214,10 @@ def structure_estimate(text: str, check: bool = False) -> dict:
     return dict(out)
 
 
-def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_dofs: int, band: int, residual: np.ndarray):
+def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_dofs: int, band: int, step_band: int,
+                   residual: np.ndarray):
     """The core's copy of a modal reduction (:class:`vtb.run.synthesis.Reduction`), ψ read in
     place: no copy on this side."""
     flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
     return _core.Reduction(flat(lam.real), flat(lam.imag), flat(weight), np.ascontiguousarray(psi, dtype=complex),
-                           int(rail_dofs), int(band), flat(residual))
+                           int(rail_dofs), int(band), int(step_band), flat(residual))

@@ -57,11 +57,22 @@ FORMAT = 2
 CACHE_ENV = "VTB_CACHE_DIR"
 #: The undamped modes of the Ritz basis reach this multiple of the cut-off.
 BASIS_RATIO = 1.5
-#: Reach of the stored rail residual (m) on either side of a DOF, two fastener bays: the
-#: residual flexibility between rail points farther apart is dropped. It does not decay
-#: monotonically (the truncated modes' short waves): at this reach it is within ±7 % of the
-#: point value (docs/synthesis.md).
-RESIDUAL_REACH = 1.3
+#: Reach of the stored rail residual (m) on either side of a DOF: the residual flexibility
+#: between rail points farther apart is dropped. The kept modes' static flexibility carries a
+#: short-wave ripple that only the residual cancels, and it decays slowly (±7 % of the point
+#: value at 1.3 m): a load moving past an observer drives that ripple's remainder as rail
+#: acceleration in the band. At 1.3 m a moving force's rail acceleration (≤ 2 kHz) was 8–10 %
+#: off the finite elements' in r.m.s.; at this reach, with the taper below, 5 % (2.4 % with
+#: its rate term, docs/synthesis.md "Moving loads").
+RESIDUAL_REACH = 5.2
+#: The residual is kept whole up to this distance (m), then faded to zero at the reach by a
+#: raised cosine, so that no load's residual at a point jumps as it crosses the reach (a
+#: sharp cut put a spike in the acceleration there).
+RESIDUAL_TAPER = 2.6
+#: Reach of the step compliance between two loads (m): within one step no wave carries a
+#: load farther (the rail's shear wave needs 0.3 ms per metre), so the full model's value is
+#: nil there and the modes' is left out (docs/synthesis.md, "The step").
+STEP_REACH = 1.3
 
 
 def cache_dir() -> Path:
@@ -118,7 +129,8 @@ class Reduction:
     def to_core(self):
         """The core's copy (made once); ψ is then dropped here."""
         if self.core is None:
-            self.core = core_reduction(self.lam, self.weight, self.psi, self.rail_dofs, self.band, self.residual)
+            step_band = min(self.band, math.ceil(self.band * STEP_REACH / RESIDUAL_REACH))
+            self.core = core_reduction(self.lam, self.weight, self.psi, self.rail_dofs, self.band, step_band, self.residual)
             self.psi = None
         return self.core
 
@@ -165,7 +177,8 @@ def cache_key(config: Config) -> str:
         if structure["discretisation"].get(name) == default:
             structure["discretisation"].pop(name)
     text = json.dumps({"format": FORMAT, "structure": structure,
-                       "cutoff": float(cutoff), "basis_ratio": BASIS_RATIO, "reach": RESIDUAL_REACH}, sort_keys=True)
+                       "cutoff": float(cutoff), "basis_ratio": BASIS_RATIO, "reach": RESIDUAL_REACH,
+                       "taper": RESIDUAL_TAPER}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -250,9 +263,17 @@ def _build(config: Config, progress=None) -> Reduction:
     rail = system.layers[0][2]
     band = max(1, int(math.ceil(RESIDUAL_REACH * rail / system.length)))
     residual = _rail_residual(solver, c, m, psi, lam, weight, rail, band, system.n, lambda f: note(2, f))
+    residual *= _taper(band, system.length / rail)[None, None, :]
     note(2, 1.0)
     return Reduction(cache_key(config), cutoff, lam, psi, weight, rail, band, residual,
                      time.perf_counter() - t0, int(phi.shape[1]), int(basis.shape[1] - phi.shape[1]))
+
+
+def _taper(band: int, spacing: float) -> np.ndarray:
+    """The residual's weight at each DOF offset 0…band, ``spacing`` metres per DOF offset: 1 up
+    to RESIDUAL_TAPER, a raised cosine down to 0 at RESIDUAL_REACH."""
+    ramp = np.clip((np.arange(band + 1) * spacing - RESIDUAL_TAPER) / (RESIDUAL_REACH - RESIDUAL_TAPER), 0.0, 1.0)
+    return 0.5 * (1.0 + np.cos(np.pi * ramp))
 
 
 def _rail_residual(solver, c, m, psi, lam, weight, rail: int, band: int, n: int, done=None, chunk: int = 512) -> np.ndarray:

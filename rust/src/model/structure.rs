@@ -242,6 +242,17 @@ impl Structure {
         }
     }
 
+    /// Slope shape vector w′ of layer `layer` at x (structure numbering), without allocating,
+    /// where the layer is a finite-element mesh (`LayerBasis::eval_slope`; no FE–SEA
+    /// correction: the synthesis, its one user, runs finite elements); `false` on a modal layer.
+    pub fn slope_into(&self, layer: usize, x: f64, out: &mut Shape) -> bool {
+        let l = &self.layers[layer];
+        out.values.resize(l.basis.shape_len(), 0.0);
+        let done = l.basis.eval_slope(x, out);
+        out.start += l.offset;
+        done
+    }
+
     pub fn shape(&self, layer: usize, x: f64) -> Shape {
         let mut s = self.layers[layer].shape(x);
         if layer == 0

@@ -38,6 +38,7 @@ impl Reduction {
         psi: PyReadonlyArray2<'_, Complex64>,
         rail_dofs: usize,
         band: usize,
+        step_band: usize,
         residual: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Self> {
         let v = |a: PyReadonlyArray1<'_, f64>| a.as_array().to_vec();
@@ -59,6 +60,7 @@ impl Reduction {
             psi,
             rail_dofs,
             band,
+            step_band,
             v(residual),
         )
         .map(|r| Self(Arc::new(r)))

@@ -462,6 +462,7 @@ mod tests {
             &psi,
             n,
             0,
+            0,
             vec![0.0; 3 * n],
         )
         .expect("a valid reduction")

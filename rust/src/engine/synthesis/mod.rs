@@ -59,6 +59,9 @@ pub struct Reduction {
     psi_im: Vec<f64>,
     rail_dofs: usize,
     band: usize,
+    /// The reach, in rail DOFs, of the step compliance between loads (≤ `band`): within one
+    /// step no wave carries a load farther (`run`).
+    step_band: usize,
     /// R_k between rail DOFs i and i + d at `[(k·rail_dofs + i)·(band + 1) + d]`, 0 ≤ d ≤
     /// band, k = 0, 1, 2 (m/N, m·s/N, m·s²/N).
     residual: Vec<f64>,
@@ -92,7 +95,7 @@ impl Reduction {
     /// 1 (real λ) or 2 (a pair). `psi` is n_dofs × m complex, row-major, each entry its real
     /// then its imaginary part (numpy's complex128 layout), borrowed: the reduction's only
     /// copy of it is its own padded one. `residual` holds the three moments' bands one after
-    /// the other.
+    /// the other; `step_band` (≤ `band`) is the step compliance's reach.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         n_dofs: usize,
@@ -102,6 +105,7 @@ impl Reduction {
         psi: &[f64],
         rail_dofs: usize,
         band: usize,
+        step_band: usize,
         residual: Vec<f64>,
     ) -> Result<Self> {
         let m = lam_re.len();
@@ -125,6 +129,13 @@ impl Reduction {
         }
         if rail_dofs > n_dofs {
             return Err(refuse("rail_dofs", rail_dofs, "exceeds the DOF count"));
+        }
+        if step_band > band {
+            return Err(refuse(
+                "step_band",
+                step_band,
+                &format!("exceeds the stored band ({band})"),
+            ));
         }
         for j in 0..m {
             if !(lam_re[j] < 0.0 && lam_im[j].is_finite() && lam_im[j] >= 0.0) {
@@ -184,6 +195,7 @@ impl Reduction {
             psi_im,
             rail_dofs,
             band,
+            step_band,
             residual,
             gains: Arc::default(),
             step_tables: Arc::default(),
@@ -290,6 +302,12 @@ impl Reduction {
         self.moment(0, a, b)
     }
 
+    /// aᵀ·R₁·b (m·s/N): the truncated modes' damping term, which a load moving at speed v
+    /// drives through its shape's rate v·s′ (`passes`, the moving forces).
+    pub fn residual_rate(&self, a: &Shape, b: &Shape) -> f64 {
+        self.moment(1, a, b)
+    }
+
     /// sᵀR_k s, k = 0, 1, 2, of a rail shape.
     pub fn residual_moments(&self, s: &Shape) -> [f64; 3] {
         std::array::from_fn(|k| self.moment(k, s, s))
@@ -380,11 +398,26 @@ mod tests {
                 &vec![0.0; n_psi],
                 2,
                 0,
+                0,
                 vec![0.0; 6],
             )
             .unwrap_err();
             assert!(e.to_string().contains(field), "{e}");
         }
+        // the step's reach cannot pass the stored band
+        let e = Reduction::new(
+            2,
+            vec![-1.0],
+            vec![3.0],
+            vec![2.0],
+            &[0.0; 4],
+            2,
+            0,
+            1,
+            vec![0.0; 6],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("reduction.step_band"), "{e}");
         // a non-finite entry is named by DOF, mode and part
         let mut psi = vec![0.0; 4];
         psi[3] = f64::NAN;
@@ -395,6 +428,7 @@ mod tests {
             vec![2.0],
             &psi,
             2,
+            0,
             0,
             vec![0.0; 6],
         )
@@ -414,6 +448,7 @@ mod tests {
             vec![1.0],
             &[1.0, 0.0, 0.0, 0.0],
             2,
+            0,
             0,
             residual,
         )
@@ -451,6 +486,7 @@ mod tests {
             vec![2.0; m],
             &psi,
             n,
+            0,
             0,
             vec![0.0; 3 * n],
         )

@@ -22,27 +22,48 @@ impl<const W: usize> SynthesisSide<'_, W> {
         self.wheel_shapes.len()
     }
 
-    /// The moving forces' shapes at t into `shapes` and their modal force Σ P·ψᵀs into `gk`.
+    /// The moving forces' shapes (and on the rail their slopes) at t into `shapes` and their
+    /// modal force Σ P·ψᵀs into `gk`.
     fn movers_at(&mut self, t: f64, ahead: bool) {
         let (st, v) = (&self.model.structure, self.model.cfg.speed);
-        let (gk, shapes) = if ahead {
-            (&mut self.gk_ahead, &mut self.shapes_ahead)
+        let (gk, shapes, slopes) = if ahead {
+            (
+                &mut self.gk_ahead,
+                &mut self.shapes_ahead,
+                &mut self.slopes_ahead,
+            )
         } else {
-            (&mut self.gk_now, &mut self.shapes_now)
+            (&mut self.gk_now, &mut self.shapes_now, &mut self.slopes_now)
         };
-        for (mv, sh) in self.movers.iter().zip(shapes.iter_mut()) {
-            st.shape_into(mv.layer, mv.x0 + v * t, sh);
+        for ((mv, sh), sl) in self
+            .movers
+            .iter()
+            .zip(shapes.iter_mut())
+            .zip(slopes.iter_mut())
+        {
+            let x = mv.x0 + v * t;
+            st.shape_into(mv.layer, x, sh);
+            if mv.layer == 0 {
+                st.slope_into(0, x, sl);
+            }
         }
         kernels::load_movers(self.red, shapes, &self.mover_magnitudes, gk);
     }
 
-    /// The rail's residual displacement at s under the rail's moving forces (now).
+    /// The rail's residual displacement at s under the rail's moving forces (now). A force
+    /// of shape s_m(x(t)) moving at v loads the truncated modes with g = P·s_m, whose rate
+    /// ġ = P·v·s_m′ drives their damping term R₁ (docs/synthesis.md, "Moving loads"):
+    /// P·(R₀s_m + v·R₁s_m′). The next term, R₂·g̈, changed the rail's acceleration by under
+    /// 0.03 % of its r.m.s. on the converged track (measured; docs/synthesis.md), and is left out.
     fn mover_residual(&self, s: &Shape) -> f64 {
+        let v = self.model.cfg.speed;
         self.movers
             .iter()
-            .zip(&self.shapes_now)
+            .zip(self.shapes_now.iter().zip(&self.slopes_now))
             .filter(|(mv, _)| mv.layer == 0)
-            .map(|(mv, sm)| mv.magnitude * self.red.residual(s, sm))
+            .map(|(mv, (sm, sl))| {
+                mv.magnitude * (self.red.residual(s, sm) + v * self.red.residual_rate(s, sl))
+            })
             .sum()
     }
 
@@ -168,22 +189,25 @@ impl<const W: usize> SynthesisSide<'_, W> {
                 0.0
             };
         }
-        // Wheels off the rail (inactive) have no compliance with any other.
+        // Wheels off the rail (inactive) have no compliance with any other. The modes' step
+        // compliance reaches the near wheels; the residual, static, every wheel within its
+        // stored reach (as at the dampers and the observers).
         let a1 = [&self.coef.a1[0][..], &self.coef.a1[1][..]];
         for wi in 0..nw {
             let mut scaled = false;
             for vi in wi + 1..nw {
                 let (a, b) = (&self.wheel_shapes[wi], &self.wheel_shapes[vi]);
-                (self.near_pairs[wi * nw + vi], self.near_res[wi * nw + vi]) =
-                    if self.active[wi] && self.active[vi] && near(red, a, b) {
-                        if !scaled {
-                            self.scaled_port.set_mul(a1, self.ports[wi].parts());
-                            scaled = true;
-                        }
-                        (dot(&self.scaled_port, &self.ports[vi]), red.residual(a, b))
-                    } else {
-                        (0.0, 0.0)
-                    };
+                let both = self.active[wi] && self.active[vi];
+                self.near_pairs[wi * nw + vi] = if both && near(red, a, b) {
+                    if !scaled {
+                        self.scaled_port.set_mul(a1, self.ports[wi].parts());
+                        scaled = true;
+                    }
+                    dot(&self.scaled_port, &self.ports[vi])
+                } else {
+                    0.0
+                };
+                self.near_res[wi * nw + vi] = if both { red.residual(a, b) } else { 0.0 };
             }
         }
         for (e, dp) in self.dampers.iter().enumerate() {
@@ -398,6 +422,7 @@ impl<const W: usize> StructureSide<W> for SynthesisSide<'_, W> {
         let dt = self.dt();
         if !self.movers.is_empty() {
             std::mem::swap(&mut self.shapes_now, &mut self.shapes_ahead);
+            std::mem::swap(&mut self.slopes_now, &mut self.slopes_ahead);
             std::mem::swap(&mut self.gk_now, &mut self.gk_ahead);
             self.movers_at(t1 + dt, true);
         }

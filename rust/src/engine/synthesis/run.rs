@@ -11,11 +11,11 @@
 //! Within a step the displacements at the wheels and at the dampers' ports are affine in the
 //! unknown forces through the step compliance Re Σ ψ_a·a1·ψ_b + R_ab·γ_b (γ_b the step gain of
 //! load b's residual filter, `residual`; 1 for a damper's force), so the contact Newton
-//! iterates on the wheel forces alone, as in the finite-element engine. Two loads farther
-//! apart than the residual's reach (`Reduction::band` rail DOFs) have no step compliance:
-//! within one step (50 µs) no wave carries a load that far (the rail's shear wave needs
-//! 0.3 ms per metre), so the full model's value is nil and the truncated modes' remainder is
-//! noise. Tuned inerter dampers are physical elements on fixed ports: the trapezoidal rule on
+//! iterates on the wheel forces alone, as in the finite-element engine. The modes' share of
+//! the step compliance reaches the step's reach (`Reduction::step_band` rail DOFs): within
+//! one step (50 µs) no wave carries a load farther (the rail's shear wave needs 0.3 ms per
+//! metre), so the full model's value is nil there and the modes' sum is noise. The
+//! residual's share, quasi-static, reaches as far as the stored residual. Tuned inerter dampers are physical elements on fixed ports: the trapezoidal rule on
 //! their internal node gives F = κ(d − d̃) in the relative port displacement d, which is
 //! eliminated exactly.
 //!
@@ -195,14 +195,14 @@ pub(super) struct Observer {
 /// y = Re Σ ψᵀs·w·g.
 pub(super) const READOUTS: usize = 4;
 
-/// The rows `[lo, hi)` of rail DOFs within the residual's reach of a shape.
+/// The rows `[lo, hi)` of rail DOFs within the step's reach of a shape.
 pub(super) fn reach(red: &Reduction, s: &Shape) -> (usize, usize) {
-    let lo = s.start.saturating_sub(red.band);
-    let hi = (s.start + s.values.len() + red.band).min(red.rail_dofs);
+    let lo = s.start.saturating_sub(red.step_band);
+    let hi = (s.start + s.values.len() + red.step_band).min(red.rail_dofs);
     (lo.min(hi), hi)
 }
 
-/// Whether two rail shapes are within the residual's reach of each other.
+/// Whether two rail shapes are within the step's reach of each other.
 pub(super) fn near(red: &Reduction, a: &Shape, b: &Shape) -> bool {
     let (lo, hi) = reach(red, a);
     b.start < hi && b.start + b.values.len() > lo
@@ -252,10 +252,13 @@ pub(super) struct SynthesisSide<'a, const W: usize> {
     pub(super) active: Vec<bool>,
     // Dampers.
     pub(super) dampers: Vec<DamperPort>,
-    // Moving forces: shapes and modal force at t_{n+1} (now) and t_{n+2} (ahead).
+    // Moving forces: shapes, their slopes (on the rail) and modal force at t_{n+1} (now) and
+    // t_{n+2} (ahead).
     pub(super) movers: Vec<Mover>,
     pub(super) shapes_now: Vec<Shape>,
     pub(super) shapes_ahead: Vec<Shape>,
+    pub(super) slopes_now: Vec<Shape>,
+    pub(super) slopes_ahead: Vec<Shape>,
     pub(super) gk_now: CVec,
     pub(super) gk_ahead: CVec,
     /// Each moving force's magnitude, in `movers` order (the kernel's input).
@@ -279,7 +282,8 @@ pub(super) struct SynthesisSide<'a, const W: usize> {
     pub(super) g_free: Vec<[f64; 2]>,
     pub(super) g_gain: Vec<[f64; 2]>,
     pub(super) g_now: Vec<f64>,
-    /// Near wheel pairs `[wi·nw + vi]`, wi < vi: the modes' step compliance and R₀ between them.
+    /// Wheel pairs `[wi·nw + vi]`, wi < vi: the modes' step compliance between near ones, R₀
+    /// between any two.
     pub(super) near_pairs: Vec<f64>,
     pub(super) near_res: Vec<f64>,
     /// a1·ψ of a wheel (scratch of the near pairs' compliance).
@@ -375,6 +379,8 @@ impl<'a, const W: usize> SynthesisSide<'a, W> {
             ports,
             shapes_now: mover_shapes(),
             shapes_ahead: mover_shapes(),
+            slopes_now: mover_shapes(),
+            slopes_ahead: mover_shapes(),
             mover_magnitudes: movers.iter().map(|m| m.magnitude).collect(),
             movers,
             gk_now: CVec::zeros(n),

@@ -84,6 +84,19 @@ impl LayerBasis {
         self.eval_derivative::<true>(x, out);
     }
 
+    /// Slope shape vector w′(x) of a finite-element layer (the derivative of `eval`'s, laid
+    /// out as it and overwritten without allocating): how a load's shape changes as it moves.
+    /// `false`, `out` untouched, on a modal layer (no moving load needs its slope).
+    pub fn eval_slope(&self, x: f64, out: &mut Shape) -> bool {
+        match self {
+            LayerBasis::Modal(_) => false,
+            LayerBasis::Fem(b) => {
+                fem_eval::<SLOPE>(b, x, out);
+                true
+            }
+        }
+    }
+
     /// `eval` or, with `CURVATURE`, `eval_curvature` (one body, compiled once for each).
     #[inline]
     fn eval_derivative<const CURVATURE: bool>(&self, x: f64, out: &mut Shape) {
@@ -98,24 +111,8 @@ impl LayerBasis {
                     b.eval_into(x, &mut out.values);
                 }
             }
-            LayerBasis::Fem(b) if !b.covers(x) => {
-                out.start = 0;
-                out.values.fill(0.0);
-            }
-            LayerBasis::Fem(b) => {
-                let e = b.element_of(x);
-                let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
-                out.start = 2 * e;
-                let xi = x - a;
-                let coeffs = interdependent(l, b.phi[e]);
-                for (o, c) in out.values.iter_mut().zip(&coeffs[usize::from(CURVATURE)]) {
-                    *o = if CURVATURE {
-                        c[1] + xi * (2.0 * c[2] + xi * 3.0 * c[3])
-                    } else {
-                        c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]))
-                    };
-                }
-            }
+            LayerBasis::Fem(b) if CURVATURE => fem_eval::<CURVATURE_OF_ROTATION>(b, x, out),
+            LayerBasis::Fem(b) => fem_eval::<VALUE>(b, x, out),
         }
     }
 
@@ -126,6 +123,36 @@ impl LayerBasis {
         };
         self.eval(x, &mut s);
         s
+    }
+}
+
+/// What `fem_eval` evaluates: w, w′ (both from the displacement polynomials) or ψ′ (from the
+/// rotation's: the Timoshenko element's curvature).
+const VALUE: u8 = 0;
+const SLOPE: u8 = 1;
+const CURVATURE_OF_ROTATION: u8 = 2;
+
+/// A finite-element shape vector at x (zero off the mesh): `WHAT` of the element's
+/// interdependent polynomials.
+#[inline]
+fn fem_eval<const WHAT: u8>(b: &FemBasis, x: f64, out: &mut Shape) {
+    if !b.covers(x) {
+        out.start = 0;
+        out.values.fill(0.0);
+        return;
+    }
+    let e = b.element_of(x);
+    let (a, l) = (b.nodes[e], b.nodes[e + 1] - b.nodes[e]);
+    out.start = 2 * e;
+    let xi = x - a;
+    let coeffs = interdependent(l, b.phi[e]);
+    let polys = &coeffs[usize::from(WHAT == CURVATURE_OF_ROTATION)];
+    for (o, c) in out.values.iter_mut().zip(polys) {
+        *o = if WHAT == VALUE {
+            c[0] + xi * (c[1] + xi * (c[2] + xi * c[3]))
+        } else {
+            c[1] + xi * (2.0 * c[2] + xi * 3.0 * c[3])
+        };
     }
 }
 

@@ -299,3 +299,50 @@ fn patch_flexibility_is_the_weighted_average_of_the_local_flexibility() {
         assert!((got - want).abs() < 1e-6 * want, "x={x}: {got} vs {want}");
     }
 }
+
+/// The slope shape is the derivative of the value shape: against a central difference inside
+/// every kind of element (Euler–Bernoulli, Timoshenko), zero off the mesh; a modal layer has
+/// none.
+#[test]
+fn slope_shape_is_the_derivative_of_the_value_shape() {
+    for mesh in [rail_mesh(), FemBasis::uniform(0.0, 1.0, 10)] {
+        slope_matches_a_central_difference(mesh);
+    }
+    let modal = LayerBasis::Modal(ModalBasis::new(10.0, 1.0, 4));
+    let mut d = modal.shape(5.0);
+    assert!(!modal.eval_slope(5.0, &mut d));
+}
+
+fn slope_matches_a_central_difference(mesh: FemBasis) {
+    let basis = LayerBasis::Fem(mesh.clone());
+    let (mut s, mut sp, mut sm, mut d) = (
+        basis.shape(0.0),
+        basis.shape(0.0),
+        basis.shape(0.0),
+        basis.shape(0.0),
+    );
+    let h = 1e-6;
+    for k in 0..400 {
+        let x = mesh.start() + (mesh.end() - mesh.start()) * (k as f64 + 0.37) / 400.0;
+        let e = mesh.element_of(x);
+        // keep the stencil inside the element: the slope jumps at nodes
+        if x - h <= mesh.nodes[e] || x + h >= mesh.nodes[e + 1] {
+            continue;
+        }
+        assert!(basis.eval_slope(x, &mut d));
+        basis.eval(x, &mut s);
+        basis.eval(x + h, &mut sp);
+        basis.eval(x - h, &mut sm);
+        assert_eq!((d.start, sp.start, sm.start), (s.start, s.start, s.start));
+        for i in 0..4 {
+            let fd = (sp.values[i] - sm.values[i]) / (2.0 * h);
+            assert!(
+                close(d.values[i], fd, 1e-6),
+                "x = {x}, entry {i}: {} vs {fd}",
+                d.values[i]
+            );
+        }
+    }
+    assert!(basis.eval_slope(mesh.end() + 1.0, &mut d));
+    assert!(d.values.iter().all(|&v| v == 0.0));
+}
