@@ -45,6 +45,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
+from .. import _core
 from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, fix_signs, layer_index,
                               shape_matrix, sliced_eigsh, spd_solver, structure_estimate)
 from ..config.fields import Config, Discretisation, Solver, structure_json
@@ -55,24 +56,14 @@ from ..optim.checkpoint import clean_stale_temps
 FORMAT = 2
 #: Environment variable that overrides the cache folder.
 CACHE_ENV = "VTB_CACHE_DIR"
-#: The undamped modes of the Ritz basis reach this multiple of the cut-off.
-BASIS_RATIO = 1.5
-#: Reach of the stored rail residual (m) on either side of a DOF: the residual flexibility
-#: between rail points farther apart is dropped. The kept modes' static flexibility carries a
-#: short-wave ripple that only the residual cancels, and it decays slowly (±7 % of the point
-#: value at 1.3 m): a load moving past an observer drives that ripple's remainder as rail
-#: acceleration in the band. At 1.3 m a moving force's rail acceleration (≤ 2 kHz) was 8–10 %
-#: off the finite elements' in r.m.s.; at this reach, with the taper below, 5 % (2.4 % with
-#: its rate term, docs/synthesis.md "Moving loads").
-RESIDUAL_REACH = 5.2
-#: The residual is kept whole up to this distance (m), then faded to zero at the reach by a
-#: raised cosine, so that no load's residual at a point jumps as it crosses the reach (a
-#: sharp cut put a spike in the acceleration there).
-RESIDUAL_TAPER = 2.6
-#: Reach of the step compliance between two loads (m): within one step no wave carries a
-#: load farther (the rail's shear wave needs 0.3 ms per metre), so the full model's value is
-#: nil there and the modes' is left out (docs/synthesis.md, "The step").
-STEP_REACH = 1.3
+# The reduction's geometry lives in the core (rust/src/engine/synthesis/mod.rs says why each
+# value): the Ritz basis reaches BASIS_RATIO·f_c; the stored residual reaches RESIDUAL_REACH
+# (m), whole to RESIDUAL_TAPER and faded out beyond; the modes' step compliance reaches
+# STEP_REACH (m).
+BASIS_RATIO = _core.SYNTHESIS_BASIS_RATIO
+RESIDUAL_REACH = _core.SYNTHESIS_RESIDUAL_REACH
+RESIDUAL_TAPER = _core.SYNTHESIS_RESIDUAL_TAPER
+STEP_REACH = _core.SYNTHESIS_STEP_REACH
 
 
 def cache_dir() -> Path:

@@ -42,6 +42,13 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RESULTS_EPOCH", vtb::RESULTS_EPOCH)?;
     m.add("DEFAULT_LANES", vtb::engine::DEFAULT_LANES)?;
     m.add("SYNTHESIS_LANES", vtb::engine::SYNTHESIS_LANES)?;
+    {
+        use vtb::engine::synthesis as s;
+        m.add("SYNTHESIS_BASIS_RATIO", s::BASIS_RATIO)?;
+        m.add("SYNTHESIS_RESIDUAL_REACH", s::RESIDUAL_REACH)?;
+        m.add("SYNTHESIS_RESIDUAL_TAPER", s::RESIDUAL_TAPER)?;
+        m.add("SYNTHESIS_STEP_REACH", s::STEP_REACH)?;
+    }
     m.add("MIN_BINS_PER_BAND", vtb::outputs::bands::MIN_BINS_PER_BAND)?;
     m.add("ACC_REFERENCE", vtb::outputs::bands::ACC_REFERENCE)?;
     Ok(())

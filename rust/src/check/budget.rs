@@ -171,8 +171,7 @@ impl SynthesisBuild {
     }
 }
 
-/// The synthesis's Ritz basis reaches this multiple of the cut-off (vtb.run.synthesis).
-pub const BASIS_RATIO: f64 = 1.5;
+use crate::engine::synthesis::{BASIS_RATIO, RESIDUAL_REACH};
 /// Seconds per unit of the build's three costs, fitted to builds of one span and of one span
 /// between 50 m embankments at 300 Hz on the 2-core machine (one BLAS thread; 2026-12-05 at
 /// load 6, where the figures were 2–2.5 times these, and idle, about half of them): the
@@ -216,10 +215,13 @@ pub fn synthesis_build(cfg: &Config) -> Option<SynthesisBuild> {
     // The Ritz basis and its modes (2·n·q), the attachments with their solve and QR (3·n·a),
     // the projected matrices and the companion problem with its complex eigenvectors and
     // LAPACK's work (160·q² bytes), ψ with its two products (3·n·m complex), six blocks of 512
-    // rail solves, and the core's copy of ψ.
+    // rail solves, the core's copy of ψ, and the residual's three bands over the rail (twice:
+    // built, and the core's copy).
+    let band = (RESIDUAL_REACH * rail / cfg.structure.length).ceil() + 1.0;
     let bytes = F64 * (2.0 * n * q + 3.0 * n * attachments + 6.0 * 512.0 * n)
         + 160.0 * q * q
-        + 16.0 * 4.0 * n * modes;
+        + 16.0 * 4.0 * n * modes
+        + F64 * 2.0 * 3.0 * rail * band;
     let stages = [
         SECONDS_PER_NQ * n * q,
         SECONDS_PER_EIG * (2.0 * q).powi(3),
