@@ -20,6 +20,14 @@ from .. import _core
 from ..config.fields import Config, structure_json
 from ..errors import config_error
 
+#: The synthesis reduction's geometry, held by the core (rust/src/model/resolution.rs says
+#: why each value): the Ritz basis's reach as a multiple of the cut-off, the stored residual's
+#: reach and the distance it is whole to (m), the modes' step compliance reach (m).
+SYNTHESIS_BASIS_RATIO = _core.SYNTHESIS_BASIS_RATIO
+SYNTHESIS_RESIDUAL_REACH = _core.SYNTHESIS_RESIDUAL_REACH
+SYNTHESIS_RESIDUAL_TAPER = _core.SYNTHESIS_RESIDUAL_TAPER
+SYNTHESIS_STEP_REACH = _core.SYNTHESIS_STEP_REACH
+
 
 @dataclass
 class System:

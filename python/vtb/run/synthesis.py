@@ -45,8 +45,8 @@ import scipy.linalg
 import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
-from .. import _core
-from ..analysis.eigen import (EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, fix_signs, layer_index,
+from ..analysis.eigen import (SYNTHESIS_BASIS_RATIO, SYNTHESIS_RESIDUAL_REACH, SYNTHESIS_RESIDUAL_TAPER, SYNTHESIS_STEP_REACH,
+                              EigshFailed, assemble, checked_frequencies, checked_positions, core_reduction, fix_signs, layer_index,
                               shape_matrix, sliced_eigsh, spd_solver, structure_estimate)
 from ..config.fields import Config, Discretisation, Solver, structure_json
 from ..errors import SolverError, config_error
@@ -56,14 +56,14 @@ from ..optim.checkpoint import clean_stale_temps
 FORMAT = 2
 #: Environment variable that overrides the cache folder.
 CACHE_ENV = "VTB_CACHE_DIR"
-# The reduction's geometry lives in the core (rust/src/engine/synthesis/mod.rs says why each
+# The reduction's geometry lives in the core (rust/src/model/resolution.rs says why each
 # value): the Ritz basis reaches BASIS_RATIO·f_c; the stored residual reaches RESIDUAL_REACH
 # (m), whole to RESIDUAL_TAPER and faded out beyond; the modes' step compliance reaches
 # STEP_REACH (m).
-BASIS_RATIO = _core.SYNTHESIS_BASIS_RATIO
-RESIDUAL_REACH = _core.SYNTHESIS_RESIDUAL_REACH
-RESIDUAL_TAPER = _core.SYNTHESIS_RESIDUAL_TAPER
-STEP_REACH = _core.SYNTHESIS_STEP_REACH
+BASIS_RATIO = SYNTHESIS_BASIS_RATIO
+RESIDUAL_REACH = SYNTHESIS_RESIDUAL_REACH
+RESIDUAL_TAPER = SYNTHESIS_RESIDUAL_TAPER
+STEP_REACH = SYNTHESIS_STEP_REACH
 
 
 def cache_dir() -> Path:

@@ -43,7 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_LANES", vtb::engine::DEFAULT_LANES)?;
     m.add("SYNTHESIS_LANES", vtb::engine::SYNTHESIS_LANES)?;
     {
-        use vtb::engine::synthesis as s;
+        use vtb::model::resolution as s;
         m.add("SYNTHESIS_BASIS_RATIO", s::BASIS_RATIO)?;
         m.add("SYNTHESIS_RESIDUAL_REACH", s::RESIDUAL_REACH)?;
         m.add("SYNTHESIS_RESIDUAL_TAPER", s::RESIDUAL_TAPER)?;

@@ -171,7 +171,7 @@ impl SynthesisBuild {
     }
 }
 
-use crate::engine::synthesis::{BASIS_RATIO, RESIDUAL_REACH};
+use crate::model::resolution::{BASIS_RATIO, RESIDUAL_REACH};
 /// Seconds per unit of the build's three costs, fitted to builds of one span and of one span
 /// between 50 m embankments at 300 Hz on the 2-core machine (one BLAS thread; 2026-12-05 at
 /// load 6, where the figures were 2–2.5 times these, and idle, about half of them): the

@@ -40,28 +40,6 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use step::Coefficients;
 
-// The reduction's geometry, read from here by vtb.run.synthesis (which builds the reduction)
-// and by the build's estimate (`check::budget`).
-
-/// The undamped modes of the Ritz basis reach this multiple of the cut-off.
-pub const BASIS_RATIO: f64 = 1.5;
-/// Reach of the stored rail residual (m) on either side of a DOF: the residual between rail
-/// points farther apart is dropped. The kept modes' static flexibility carries a short-wave
-/// ripple that only the residual cancels, and it decays slowly (±7 % of the point value at
-/// 1.3 m): a load moving past an observer drives what is left of it as rail acceleration in
-/// the band. At 1.3 m a moving force's rail acceleration (≤ 2 kHz) was 8–11 % off the finite
-/// elements' in r.m.s.; at this reach, with the taper, 5.4 % (3.2 % with the moving forces'
-/// rate term; docs/synthesis.md, "Moving loads").
-pub const RESIDUAL_REACH: f64 = 5.2;
-/// The residual is kept whole up to this distance (m), then faded to zero at the reach by a
-/// raised cosine, so that no load's residual at a point jumps as it crosses the reach (a sharp
-/// cut put a spike in the acceleration there).
-pub const RESIDUAL_TAPER: f64 = 2.6;
-/// Reach of the modes' step compliance between two loads (m): within one step no wave
-/// carries a load farther (the rail's shear wave needs 0.3 ms per metre), so the full model's
-/// value is nil there and the modes' sum is noise (`run`).
-pub const STEP_REACH: f64 = 1.3;
-
 /// Mode arrays are padded with inert modes (ψ = 0, λ = 0, w = 0) to a multiple of this, the
 /// partial sums of every dot product over the modes.
 pub(crate) const PAD: usize = crate::linalg::simd::PARTIAL_SUMS;
