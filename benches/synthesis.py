@@ -181,6 +181,8 @@ def main():
         def with_cutoff(cutoff):
             c = pair()[1]
             c.discretisation.synthesis_cutoff = cutoff
+            c.solver.memory_budget = 16e9  # the 6 kHz build's estimate passes 8 GB; the machine has 24
+
             return vtb.simulate(c).metrics(), int(synthesis.reduction(c).n_modes)
 
         for cutoff in (3000.0, 5000.0, 6000.0):
