@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 import scipy.sparse as sp
@@ -40,6 +41,8 @@ class System:
     c: sp.csc_matrix
     layers: list  # [(name, offset, n_dofs)]
     length: float
+    #: Each layer's node positions (m; node j holds DOFs offset + 2j, 2j + 1), None for a modal layer.
+    nodes: Optional[list] = None
 
 
 def assemble(config: Config) -> System:
@@ -51,7 +54,8 @@ def assemble(config: Config) -> System:
         r, c, v = out[name]
         # COO → CSC sums duplicate entries (both halves of the symmetric matrices are stored).
         mats[name] = sp.coo_matrix((np.asarray(v, float), (np.asarray(r), np.asarray(c))), shape=(n, n)).tocsc()
-    return System(js, n, mats["m"], mats["k"], mats["c"], [tuple(l) for l in out["layer_offsets"]], float(config.structure.length))
+    nodes = [None if x is None else np.asarray(x, float) for x in out["layer_nodes"]]
+    return System(js, n, mats["m"], mats["k"], mats["c"], [tuple(l) for l in out["layer_offsets"]], float(config.structure.length), nodes)
 
 
 def layer_index(system: System, layer, field_name: str = "layer") -> int:

@@ -69,9 +69,11 @@ import scipy.sparse.linalg as spla
 from ..config.fields import Config
 from ..config.resolution import resolved_band, warn_beyond
 from ..errors import SolverError, VtbError, config_error
-from .eigen import EigshFailed, System, _float_array, assemble, checked_frequencies, checked_positions, layer_index, shape_matrix, sliced_eigsh
+from . import substructures
+from .eigen import EigshFailed, System, _float_array, assemble, checked_frequencies, checked_positions, fix_signs, layer_index, shape_matrix, sliced_eigsh
+from .substructures import Substructuring
 
-__all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT"]
+__all__ = ["receptance", "decay_rate", "modes", "Modes", "DEFAULT_DECAY_POSITIONS", "DENSE_EIGEN_LIMIT", "SUBSTRUCTURE_FROM"]
 
 #: 10·log10(e) ≈ 4.343 dB: the numerator of the decay-rate estimator.
 DB_PER_NEPER_ENERGY = 10.0 * math.log10(math.e)
@@ -386,6 +388,11 @@ def decay_rate(
 
 
 # ---------------------------------------------------------------------------- modes
+#: :func:`modes` substructures (``method="auto"``) a structure it can cut into at least this
+#: many substructures: below it the global eigensolve is as fast (benches/substructures.py).
+SUBSTRUCTURE_FROM = 6
+
+
 @dataclass
 class Modes:
     """Natural modes of the undamped structure (K φ = ω² M φ).
@@ -394,24 +401,26 @@ class Modes:
     ----------
     frequencies : numpy.ndarray
         Natural frequencies (Hz), ascending, shape (n_modes,).
-    shapes : numpy.ndarray
-        Mode shapes, shape (n_dofs, n_modes), in the structure's DOF numbering (module
-        docstring), mass-normalised: φᵢᵀ M φᵢ = 1 (kg⁻½ per generalised DOF; a displacement
-        of 1/√m_modal metres). The sign of each mode is fixed so that its largest-magnitude
-        entry is positive.
     layers : list
         (name, first DOF, number of DOFs) of each layer.
     method : str
-        ``"shift-invert"`` (sparse ARPACK, scipy.sparse.linalg.eigsh) or ``"dense"``.
+        ``"shift-invert"`` (sparse ARPACK, scipy.sparse.linalg.eigsh), ``"dense"`` or
+        ``"substructured"`` (:mod:`vtb.analysis.substructures`).
+    substructuring : Substructuring or None
+        The cuts and the reduction, for ``"substructured"``.
     """
 
     frequencies: np.ndarray
-    shapes: np.ndarray
     layers: list
     method: str
+    substructuring: Optional[Substructuring] = None
+    #: The eigenvectors: of the structure, or of the substructured reduction (u = T q).
+    _vectors: np.ndarray = field(repr=False, default=None)
+    _m: sp.csr_matrix = field(repr=False, default=None)
     _json: str = field(repr=False, default="")
     _length: float = field(repr=False, default=0.0)
     _n: int = field(repr=False, default=0)
+    _shapes: Optional[np.ndarray] = field(repr=False, default=None)
 
     def __len__(self) -> int:
         return int(self.frequencies.size)
@@ -420,6 +429,43 @@ class Modes:
     def omega(self) -> np.ndarray:
         """Natural circular frequencies (rad/s)."""
         return 2.0 * math.pi * self.frequencies
+
+    @property
+    def shapes(self) -> np.ndarray:
+        """Mode shapes, shape (n_dofs, n_modes), in the structure's DOF numbering (module
+        docstring), mass-normalised: φᵢᵀ M φᵢ = 1 (kg⁻½ per generalised DOF; a displacement
+        of 1/√m_modal metres). The sign of each mode is fixed so that its largest-magnitude
+        entry is positive (of its reduced vector, for substructured modes). Substructured modes
+        are expanded on first use (n_dofs × n_modes floats: prefer :meth:`displacement` and
+        :meth:`layer_energy` on long structures)."""
+        if self._shapes is None:
+            self._shapes = np.asarray(self._to_dofs(self._vectors))
+        return self._shapes
+
+    def _to_dofs(self, vectors: np.ndarray) -> np.ndarray:
+        return vectors if self.substructuring is None else self.substructuring.apply(vectors)
+
+    def _projected(self, rows: sp.spmatrix) -> np.ndarray:
+        """rowsᵀ·φ for a sparse n_dofs × p ``rows``, without expanding substructured modes."""
+        if self.substructuring is None:
+            return np.asarray(rows.T @ self._vectors)
+        return self.substructuring.transpose_apply(rows) @ self._vectors
+
+    def layer_energy(self, layer: Union[str, int]) -> np.ndarray:
+        """The share (0–1) of each mode's kinetic energy in ``layer`` (name or index):
+        φ_Lᵀ M_LL φ_L of the mass-normalised mode, shape (n_modes,)."""
+        system = System(self._json, self._n, None, None, None, self.layers, self._length)
+        _, first, count = self.layers[layer_index(system, layer, "layer")]
+        sl = slice(first, first + count)
+        mll = self._m[sl, sl]
+        if self.substructuring is None:
+            phi = self._vectors[sl]
+            return np.einsum("ij,ij->j", phi, mll @ phi)
+        mask = np.zeros(self._n)
+        mask[sl] = 1.0
+        only = sp.diags(mask) @ self._m @ sp.diags(mask)  # M_LL in place: TᵀM_LLT by blocks
+        z = self._vectors
+        return np.einsum("ij,ij->j", z, self.substructuring.project(only) @ z)
 
     def displacement(self, layer: Union[str, int], x, mode: Optional[int] = None) -> np.ndarray:
         """Displacement of ``layer`` along x (m) in the mass-normalised modes, s(x)ᵀφ.
@@ -444,36 +490,36 @@ class Modes:
         if mode is not None:
             if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)) or not -len(self) <= mode < len(self):
                 raise config_error("mode", mode, f"must be an integer index below {len(self)}")
-        s = shape_matrix(system, li, xs)
-        phi = self.shapes if mode is None else self.shapes[:, [int(mode)]]
-        out = np.asarray(s.T @ phi)
-        return out[:, 0] if mode is not None else out
+        out = self._projected(shape_matrix(system, li, xs))
+        return out[:, int(mode)] if mode is not None else out
 
 
-def _normalise_modes(lam: np.ndarray, phi: np.ndarray, m: sp.csc_matrix):
+def _normalise_modes(lam: np.ndarray, phi: np.ndarray, m: sp.spmatrix):
     order = np.argsort(lam)
     lam, phi = lam[order], np.array(phi[:, order], dtype=float)
     mass = np.einsum("ij,ij->j", phi, np.asarray(m @ phi))
-    phi /= np.sqrt(mass)[None, :]
-    big = np.argmax(np.abs(phi), axis=0)
-    phi *= np.sign(phi[big, np.arange(phi.shape[1])])[None, :]
-    return lam, phi
+    return lam, phi / np.sqrt(mass)[None, :]
 
 
-
-
-def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
+def modes(config: Config, fmax: float, fmin: float = 0.0, method: str = "auto") -> Modes:
     """All natural frequencies and mass-normalised mode shapes of the undamped structure with
     fmin ≤ f ≤ fmax.
 
     Solves the generalised symmetric problem K φ = ω² M φ (damping, including the dampers'
-    dashpots, is ignored; the dampers' inerters and springs are kept). The sparse solver is
-    ARPACK's shift-invert Lanczos (scipy.sparse.linalg.eigsh) with the shift σ just below
-    (2π·fmin)²: the number of requested eigenpairs is doubled until the one farthest from σ
-    lies beyond (2π·fmax)², so every eigenvalue between σ and that one — in particular all of
-    [fmin, fmax] — has been found. When the request would reach n − 1 eigenpairs (ARPACK's
-    limit) or ARPACK fails, a dense generalised eigensolver (scipy.linalg.eigh) is used
-    instead, but only for n ≤ :data:`DENSE_EIGEN_LIMIT` DOFs.
+    dashpots, is ignored; the dampers' inerters and springs are kept).
+
+    - ``method="global"``: ARPACK's shift-invert Lanczos (scipy.sparse.linalg.eigsh) on the
+      whole structure, by spectrum slicing from a shift just below (2π·fmin)² until the band is
+      covered (:func:`vtb.analysis.eigen.sliced_eigsh`); when ARPACK fails, a dense generalised
+      eigensolver (scipy.linalg.eigh), but only for n ≤ :data:`DENSE_EIGEN_LIMIT` DOFs.
+    - ``method="substructured"``: the structure cut at its joints and every
+      :data:`~vtb.analysis.substructures.SUBSTRUCTURE_LENGTH` m and reduced by fixed-interface
+      component mode synthesis (:mod:`vtb.analysis.substructures`), each distinct substructure
+      once, then the same slicing on the reduced problem. Its frequencies are upper bounds of
+      the global ones, within 5e-5 (relative) of them on the deck's modes and 3e-4 on every
+      mode below fmax (docs/substructures.md; finite-element layers only).
+    - ``method="auto"`` (default): substructured when the structure cuts into at least
+      :data:`SUBSTRUCTURE_FROM` substructures, else global.
 
     Parameters
     ----------
@@ -484,6 +530,7 @@ def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
     fmin : float, default 0.0
         Lower frequency (Hz), 0 ≤ fmin < fmax. Rigid-body modes of an unrestrained structure
         (0 Hz, to round-off) are included when fmin = 0.
+    method : {"auto", "global", "substructured"}
 
     Returns
     -------
@@ -493,7 +540,8 @@ def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
     Raises
     ------
     vtb.ConfigError
-        Invalid configuration, fmax ≤ 0 or not finite, fmin < 0 or ≥ fmax.
+        Invalid configuration, fmax ≤ 0 or not finite, fmin < 0 or ≥ fmax, an unknown
+        ``method``, or ``"substructured"`` on a structure that cannot be cut (a modal layer).
     vtb.SolverError
         The sparse eigensolver failed on a structure too large for the dense fallback.
     """
@@ -508,21 +556,30 @@ def modes(config: Config, fmax: float, fmin: float = 0.0) -> Modes:
         raise config_error("fmin", fmin, "must be ≥ 0 (Hz)")
     if fmin >= fmax:
         raise config_error("fmin", fmin, f"must be < fmax = {fmax} Hz")
+    methods = ("auto", "global", "substructured")
+    if not isinstance(method, str) or method not in methods:
+        raise config_error("method", method, f"must be one of {methods}")
     system = assemble(config)
-    n = system.n
     lo, hi = (2.0 * math.pi * fmin) ** 2, (2.0 * math.pi * fmax) ** 2
-    method = "shift-invert"
+    cut = None if method == "global" else substructures.reduce(system, fmax)
+    if method == "substructured" and cut is None:
+        raise config_error("method", method, "the structure cannot be cut: every layer must be finite elements with a node across the track somewhere")
+    if method == "auto" and cut is not None and cut.substructures < SUBSTRUCTURE_FROM:
+        cut = None
+    k, m = (system.k, system.m) if cut is None else (cut.k, cut.m)
+    name = "shift-invert" if cut is None else "substructured"
     try:
-        lam, phi = sliced_eigsh(system.k, system.m, lo - 1e-6 * hi, hi)
+        lam, vec = sliced_eigsh(k, m, lo - 1e-6 * hi, hi)
     except EigshFailed:
-        if n > DENSE_EIGEN_LIMIT:
-            raise SolverError(f"the shift-invert eigensolver failed on {n} DOFs (the dense fallback is limited to {DENSE_EIGEN_LIMIT}); lower fmax or split the band with fmin") from None
-        method = "dense"
-        lam, phi = scipy.linalg.eigh(system.k.toarray(), system.m.toarray())
-    lam, phi = _normalise_modes(np.asarray(lam, float), phi, system.m)
+        if k.shape[0] > DENSE_EIGEN_LIMIT:
+            raise SolverError(f"the shift-invert eigensolver failed on {k.shape[0]} DOFs (the dense fallback is limited to {DENSE_EIGEN_LIMIT}); lower fmax or split the band with fmin") from None
+        name = "dense" if cut is None else name
+        lam, vec = scipy.linalg.eigh(k.toarray(), m.toarray())
+    lam, vec = _normalise_modes(np.asarray(lam, float), vec, m)
+    vec = fix_signs(vec)
     f = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * math.pi)
     keep = (f >= fmin) & (f <= fmax)  # f = 0 for round-off negative rigid-body eigenvalues
-    return Modes(f[keep], phi[:, keep], system.layers, method, system.json, system.length, n)
+    return Modes(f[keep], system.layers, name, cut, vec[:, keep], system.m.tocsr(), system.json, system.length, system.n)
 
 
 #: EN 1990 A2 (A2.4.4.2.1): the lowest frequency (Hz) up to which the deck acceleration counts.
@@ -537,13 +594,8 @@ def deck_band(config: Config, fmax: float = 120.0) -> float:
     exceeds the default 30 Hz (short stiff spans).
 
     Raises :class:`vtb.ConfigError` when fewer than three deck modes lie below ``fmax``."""
-    system = assemble(config)
     found = modes(config, fmax)
-    _, first, count = system.layers[-1]
-    deck = slice(first, first + count)
-    m_deck = system.m.tocsr()[deck, deck]
-    phi = found.shapes[deck, :]
-    share = np.einsum("ij,ij->j", phi, m_deck @ phi)  # φᵀMφ = 1 over the whole structure
+    share = found.layer_energy(len(found.layers) - 1)  # φᵀMφ = 1 over the whole structure
     f = found.frequencies[(share > 0.5) & (found.frequencies > 0)]
     if f.size < 3:
         raise config_error("fmax", fmax, f"only {f.size} deck modes below it; raise it to reach the deck's third mode")

@@ -125,13 +125,8 @@ def deck_frequencies(config: Config, fmax: float = 120.0, share: float = 0.5, cl
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v):
             raise config_error(name, v, {"fmax": f"must be a frequency (Hz) > 0 and at most {MAX_FREQUENCY:g}", "share": "must be a fraction of the kinetic energy in [0, 1)",
                                          "cluster": "must be a relative tolerance >= 0"}[name])
-    system = assemble(config)
     found = modes(config, fmax)
-    _, first, count = system.layers[-1]
-    deck = slice(first, first + count)
-    phi = found.shapes[deck, :]
-    energy = np.einsum("ij,ij->j", phi, system.m.tocsr()[deck, deck] @ phi)
-    f = found.frequencies[(energy > share) & (found.frequencies > 0)]
+    f = found.frequencies[(found.layer_energy(len(found.layers) - 1) > share) & (found.frequencies > 0)]
     out: list = []
     for v in f:
         if not out or v > out[-1] * (1 + cluster):

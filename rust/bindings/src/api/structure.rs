@@ -15,7 +15,8 @@ use vtb::{Profile, VtbError};
 type ShapeRows<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
 
 /// The assembled structure matrices M, K, C of a configuration as COO triplets
-/// (rows, cols, values) with their dimension, plus each layer's DOF offset.
+/// (rows, cols, values) with their dimension, plus each layer's DOF offset and, for a
+/// finite-element layer, its node positions (m).
 #[pyfunction]
 pub(crate) fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
@@ -48,6 +49,18 @@ pub(crate) fn matrices<'py>(py: Python<'py>, config_json: &str) -> PyResult<Boun
             .map(|l| (l.name.clone(), l.offset, l.n_dofs()))
             .collect::<Vec<_>>(),
     )?;
+    // Where each finite-element layer's DOFs sit: node j (DOFs 2j, 2j + 1) at x_j; None for
+    // a modal layer, whose DOFs span its length (what a substructuring cuts by).
+    let nodes = PyList::empty(py);
+    for l in &st.layers {
+        match &l.basis {
+            vtb::model::basis::LayerBasis::Fem(f) => {
+                nodes.append(PyArray1::from_vec(py, f.nodes.clone()))?
+            }
+            vtb::model::basis::LayerBasis::Modal(_) => nodes.append(py.None())?,
+        }
+    }
+    d.set_item("layer_nodes", nodes)?;
     Ok(d)
 }
 

@@ -1,0 +1,97 @@
+"""Substructured natural modes (vtb.analysis.substructures) held against the global eigensolve
+of the same finite-element structure: a 5-span viaduct between embankments, simply supported
+and continuous."""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import vtb
+from vtb.analysis import substructures
+from vtb.analysis.eigen import assemble, sliced_eigsh
+
+FMAX = 60.0
+
+
+def viaduct(n_spans: int, simply_supported: bool = True, approach: float = 30.0) -> vtb.Config:
+    cfg = vtb.paper_config(model="fast")
+    cfg = vtb.spans(cfg, [32.0] * n_spans, simply_supported=simply_supported)
+    return vtb.track_zones(cfg, approach=approach, exit=approach)
+
+
+def frequencies(k, m, fmax: float = FMAX):
+    hi = (2 * math.pi * fmax) ** 2
+    lam, vec = sliced_eigsh(k.tocsc(), m.tocsc(), -1e-6 * hi, hi)
+    return np.sqrt(np.clip(lam, 0, None)) / (2 * math.pi), vec
+
+
+@pytest.fixture(scope="module", params=[True, False], ids=["simply-supported", "continuous"])
+def five_spans(request):
+    system = assemble(viaduct(5, request.param))
+    f, phi = frequencies(system.k, system.m)
+    _, first, count = system.layers[-1]
+    deck = slice(first, first + count)
+    share = np.einsum("ij,ij->j", phi[deck], system.m.tocsr()[deck, deck] @ phi[deck])
+    return system, f, share > 0.5
+
+
+def test_substructured_frequencies_are_upper_bounds_within_3e_4_of_the_global_ones(five_spans):
+    system, f_global, deck = five_spans
+    cut = substructures.reduce(system, FMAX)
+    assert cut.substructures >= 7 and cut.distinct < cut.substructures
+    f, _ = frequencies(cut.k, cut.m)
+    assert f.size == f_global.size
+    err = (f - f_global) / f_global
+    assert np.all(err > -1e-8)  # Rayleigh–Ritz: never below the structure's own
+    assert np.max(err) < 3e-4
+    assert np.max(err[deck]) < 2e-4
+
+
+def test_the_error_falls_as_more_interior_modes_are_kept(five_spans):
+    system, f_global, deck = five_spans
+    errors = []
+    for ratio in (2.0, 3.0, 5.0, 8.0):
+        f, _ = frequencies(*_km(system, ratio))
+        errors.append(np.max((f - f_global) / f_global))
+    assert all(b < a for a, b in zip(errors, errors[1:])), errors
+    assert errors[-1] < 0.2 * errors[0]
+
+
+def _km(system, ratio):
+    cut = substructures.reduce(system, FMAX, ratio)
+    return cut.k, cut.m
+
+
+def test_equal_spans_share_one_reduction():
+    small, large = (substructures.reduce(assemble(viaduct(n)), FMAX) for n in (4, 9))
+    assert large.substructures - small.substructures == 5
+    assert large.distinct == small.distinct
+
+
+def test_substructured_modes_give_the_global_deck_shapes_and_band():
+    cfg = viaduct(6)
+    glob, sub = vtb.modes(cfg, 40.0, method="global"), vtb.modes(cfg, 40.0)
+    assert sub.method == "substructured" and glob.method == "shift-invert"
+    assert len(sub) == len(glob)
+    # The six spans' first bending modes form a cluster whose members any perturbation mixes:
+    # compare the subspaces they span along the deck, not single modes.
+    xs = np.linspace(30.0, 30.0 + 6 * 32.0, 193)
+    a, b = glob.displacement("bridge", xs)[:, :6], sub.displacement("bridge", xs)[:, :6]
+    assert np.max(scipy.linalg.subspace_angles(a, b)) < 1e-3
+    deck_g, deck_s = (m.frequencies[m.layer_energy("bridge") > 0.5] for m in (glob, sub))
+    np.testing.assert_allclose(deck_s, deck_g, rtol=2e-4)
+    assert vtb.deck_band(cfg) == pytest.approx(float(max(30.0, 1.5 * deck_g[0], deck_g[2])), rel=2e-4)
+    # the expanded shapes are mass-normalised like the global ones
+    m = assemble(cfg).m
+    np.testing.assert_allclose(np.einsum("ij,ij->j", sub.shapes, m @ sub.shapes), 1.0, rtol=1e-9)
+
+
+def test_a_bad_method_or_a_structure_that_cannot_be_cut_is_refused():
+    cfg = viaduct(3)
+    with pytest.raises(vtb.ConfigError, match="method"):
+        vtb.modes(cfg, 20.0, method="lanczos")
+    with pytest.raises(vtb.ConfigError, match="method"):
+        vtb.modes(vtb.paper_config(), 20.0, method="substructured")  # the article's modal layers
+    assert vtb.modes(vtb.paper_config(), 20.0).method == "shift-invert"
