@@ -45,7 +45,7 @@ pub const RESULTS_EPOCH: u32 = 2;
 
 pub use config::{Config, Profile};
 pub use engine::{
-    BatchOptions, Control, Job, Sink, run_batch, run_batch_each, run_batch_with, simulate,
+    BatchOptions, Control, Job, Reduced, Sink, run_batch, run_batch_each, run_batch_with, simulate,
     simulate_with,
 };
 pub use error::{Result, VtbError};

@@ -233,3 +233,31 @@ def core_reduction(lam: np.ndarray, weight: np.ndarray, psi: np.ndarray, rail_do
     flat = lambda a: np.ascontiguousarray(a, dtype=float).ravel()  # noqa: E731
     return _core.Reduction(flat(lam.real), flat(lam.imag), flat(weight), np.ascontiguousarray(psi, dtype=complex),
                            int(rail_dofs), int(band), int(step_band), flat(residual))
+
+
+def core_substructures(sub, c: sp.spmatrix):
+    """The core's copy of a substructuring (:class:`vtb.analysis.substructures.Substructuring`)
+    whose reduced damping is ``c`` (TᵀCT): what the substructured engine steps."""
+    pieces = [p for p in sub.pieces if p.inner.size]
+    dof_piece = np.full(sub.n, -1, dtype=np.int64)
+    dof_index = np.full(sub.n, -1, dtype=np.int64)
+    for i, p in enumerate(pieces):
+        dof_piece[p.inner] = i
+        dof_index[p.inner] = np.arange(p.inner.size)
+    dof_index[sub.interface] = sub.interface_cols
+    bound_ptr = np.concatenate([[0], np.cumsum([p.bound.size for p in pieces])]).astype(np.int64)
+    flat = lambda a: np.ascontiguousarray(np.concatenate([x.ravel() for x in a]) if a else np.zeros(0), dtype=float)  # noqa: E731
+
+    def triplets(a):
+        a = a.tocoo()
+        return (a.row.astype(np.int64).tolist(), a.col.astype(np.int64).tolist(), np.ascontiguousarray(a.data, dtype=float))
+
+    return _core.Substructures(
+        dof_piece, dof_index,
+        [p.group for p in pieces], [p.modes.start for p in pieces], bound_ptr.tolist(),
+        [int(c) for p in pieces for c in p.bound_cols],
+        [g.phi.shape[0] for g in sub.groups], [g.phi.shape[1] for g in sub.groups], [g.psi.shape[1] for g in sub.groups],
+        flat([g.phi for g in sub.groups]), flat([g.psi for g in sub.groups]),
+        int(sub.reduced_dofs), (triplets(sub.m), triplets(c), triplets(sub.k)),
+        flat([g.residual if g.residual is not None else np.zeros((g.phi.shape[0], 1)) for g in sub.groups]),
+        max((g.residual.shape[1] - 1 for g in sub.groups if g.residual is not None), default=0))

@@ -74,6 +74,10 @@ class Group:
     omega2: np.ndarray
     phi: np.ndarray
     psi: np.ndarray
+    #: R = K_II⁻¹ − ΦΛ⁻¹Φᵀ between rows r and r + d, 0 ≤ d ≤ band, at ``[r, d]`` (m/N): the
+    #: static flexibility the truncated interior modes hold (:func:`residual_bands`; rows of
+    #: the top layer only, zero elsewhere).
+    residual: Optional[np.ndarray] = None
 
 
 @dataclass
@@ -344,3 +348,43 @@ def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SU
     out = Substructuring(cuts, pieces, groups, on, col[on], system.n, offset, float(ratio))
     out.m, out.k = out.project(m), out.project(k)
     return out
+
+
+#: Rows (of an interior's DOFs along the track) over which a wheel's residual flexibility is
+#: kept: a contact patch spans at most two rail elements, whose DOFs lie within 12 rows.
+RESIDUAL_ROWS = 16
+
+
+def residual_bands(system: System, sub: Substructuring, band: int = RESIDUAL_ROWS) -> None:
+    """Fills each group's ``residual``: the static flexibility of its truncated fixed-interface
+    modes between the top layer's (the rail's) interior DOFs within ``band`` rows, so that a
+    wheel sees the rail's whole static flexibility (constraint modes and kept modes hold the
+    rest exactly). Computed on the first piece of each group."""
+    k = system.k.tocsr()
+    _, first, count = system.layers[0]
+    done = set()
+    for p in sub.pieces:
+        if p.inner.size == 0 or p.group in done:
+            continue
+        done.add(p.group)
+        g = sub.groups[p.group]
+        rows = np.flatnonzero((p.inner >= first) & (p.inner < first + count))
+        kii = k[p.inner][:, p.inner]
+        e = np.zeros((p.inner.size, rows.size))
+        e[rows, np.arange(rows.size)] = 1.0
+        x = np.asarray(spd_solver(kii).solve(e))
+        x -= g.phi @ ((g.phi[rows].T) / g.omega2[:, None])
+        out = np.zeros((p.inner.size, band + 1))
+        for j, r in enumerate(rows):
+            hi = min(p.inner.size, r + band + 1)
+            out[r, :hi - r] = x[r:hi, j]
+        # keep only pairs of rail rows (symmetric: R[r, r + d] from the column of r)
+        rail = np.zeros(p.inner.size, bool)
+        rail[rows] = True
+        for d in range(band + 1):
+            partner = np.arange(p.inner.size) + d
+            ok = partner < p.inner.size
+            out[~rail, d] = 0.0
+            out[ok & rail, d] *= rail[partner[ok & rail]]
+            out[~ok, d] = 0.0
+        g.residual = out

@@ -132,7 +132,8 @@ class Discretisation(StrictFields):
     """``method``: ``"modal"`` (Hermite + sine modes, all global), ``"hybrid"`` (modal plus the
     FE–SEA correction of the local rail modes) or ``"fem"`` (cubic Hermite beam elements).
     ``synthesis_cutoff`` (Hz): run a finite-element structure by complex-modal synthesis
-    (:mod:`vtb.run.synthesis`) instead of stepping its elements."""
+    (:mod:`vtb.run.synthesis`) instead of stepping its elements; ``substructure_cutoff`` (Hz):
+    step it in substructured coordinates (:mod:`vtb.run.substructures`)."""
 
     method: Literal["modal", "hybrid", "fem"] = _default("DiscretisationConfig", "method")
     fem_elements: int = _default("DiscretisationConfig", "fem_elements")
@@ -141,6 +142,7 @@ class Discretisation(StrictFields):
     local_deflection: bool = _default("DiscretisationConfig", "local_deflection")
     element_flexibility: bool = _default("DiscretisationConfig", "element_flexibility")
     synthesis_cutoff: Optional[float] = _default("DiscretisationConfig", "synthesis_cutoff")
+    substructure_cutoff: Optional[float] = _default("DiscretisationConfig", "substructure_cutoff")
     excitation_wavelengths: Optional[list] = _default("DiscretisationConfig", "excitation_wavelengths")
 
 

@@ -20,6 +20,7 @@ from ..config.prepare import prepare
 from ..config.resolution import warn_beyond
 from ..errors import VtbError, config_error
 from .indices import metric_unit
+from . import substructures
 from .synthesis import check_build, in_memory, reduction
 from .tables import frame, to_parquet
 
@@ -321,10 +322,15 @@ def simulate(config: Config, progress: Union[bool, str, Callable] = "auto") -> R
 
 
 def _reduction(config: Config, progress="auto", text: Optional[str] = None, profile: tuple = ()):
-    """The core reduction a configuration with ``discretisation.synthesis_cutoff`` runs on.
+    """The core reduction a configuration with ``discretisation.synthesis_cutoff`` (or
+    ``substructure_cutoff``: its substructures) runs on.
     Before a reduction is loaded or built, the core validates the whole run (``text``, its core
     JSON, against ``profile``, its sampled irregularity's core arguments): every check that needs no
     model comes before the costly part."""
+    if config.discretisation.substructure_cutoff is not None:
+        if text is not None:
+            gateway.validate(text, *profile)
+        return substructures.reduction(config).to_core()
     if config.discretisation.synthesis_cutoff is None:
         return None
     if text is not None and not in_memory(config):
@@ -423,7 +429,7 @@ def simulate_batch(
     groups: dict = {}
     for j, i in enumerate(order):
         cfg = configs[i]
-        key = None if cfg.discretisation.synthesis_cutoff is None else cfg.discretisation.synthesis_cutoff
+        key = cfg.discretisation.synthesis_cutoff
         try:
             red = _reduction(cfg, "auto" if progress is not False else False, jsons[j], profiles[profile_index[j]])
         except VtbError as e:
@@ -453,7 +459,7 @@ def simulate_batch(
 
             got = _core.batch([jsons[j] for j in members], profiles, [profile_index[j] for j in members], threads or 0,
                               shifted if callback else None, histories,
-                              lanes or (SYNTHESIS_LANES if red is not None else DEFAULT_LANES), reduction=red,
+                              lanes or (SYNTHESIS_LANES if isinstance(red, _core.Reduction) else DEFAULT_LANES), reduction=red,
                               on_result=each if on_result is not None else None)
             for j, r in zip(members, got):
                 if out[j] is None:

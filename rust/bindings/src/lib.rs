@@ -35,6 +35,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(api::structure::synthesis_build, m)?)?;
     m.add_function(wrap_pyfunction!(api::structure::patch_half_length, m)?)?;
     m.add_class::<api::run::Reduction>()?;
+    m.add_class::<api::run::Substructures>()?;
     m.add_class::<api::structure::SpdSolver>()?;
     m.add_function(wrap_pyfunction!(api::config::plausible_ranges, m)?)?;
     m.add_function(wrap_pyfunction!(api::config::check_plausible, m)?)?;

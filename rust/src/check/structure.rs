@@ -88,6 +88,27 @@ pub(super) fn discretisation(cfg: &Config) -> Result<()> {
             ));
         }
     }
+    if let Some(fc) = d.substructure_cutoff {
+        let fc = positive("discretisation.substructure_cutoff", fc)?;
+        if d.method != Method::Fem {
+            return Err(VtbError::config(
+                "discretisation.substructure_cutoff",
+                fc,
+                format!(
+                    "substructures reduce a finite-element structure (discretisation.method = \
+                     \"fem\", not {:?})",
+                    d.method
+                ),
+            ));
+        }
+        if d.synthesis_cutoff.is_some() {
+            return Err(VtbError::config(
+                "discretisation.substructure_cutoff",
+                fc,
+                "a structure runs on one engine: clear discretisation.synthesis_cutoff or this",
+            ));
+        }
+    }
     if d.method == Method::Fem && !(2..=MAX_ELEMENTS).contains(&d.fem_elements) {
         return Err(VtbError::config(
             "discretisation.fem_elements",

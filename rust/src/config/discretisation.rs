@@ -55,6 +55,13 @@ pub struct DiscretisationConfig {
     /// `method = "fem"` and the structure's reduction (`vtb.synthesis.reduction`).
     #[serde(default)]
     pub synthesis_cutoff: Option<f64>,
+    /// Cut-off (Hz) of the substructured coordinates of a finite-element structure: `None`
+    /// steps the finite elements; f_c cuts the structure at its joints and every 32 m, keeps
+    /// each substructure's fixed-interface modes below f_c and the DOFs on the cuts, and steps
+    /// that banded system by Newmark (docs/substructures.md). Needs `method = "fem"` and the
+    /// structure's substructures (`vtb.run.substructures.reduction`).
+    #[serde(default)]
+    pub substructure_cutoff: Option<f64>,
 }
 
 fn default_true() -> bool {
@@ -89,6 +96,7 @@ impl Default for DiscretisationConfig {
             local_deflection: true,
             element_flexibility: true,
             synthesis_cutoff: None,
+            substructure_cutoff: None,
         }
     }
 }

@@ -10,53 +10,88 @@ use crate::config::{Config, Profile};
 use crate::error::{Result, VtbError};
 use crate::model::Model;
 use crate::model::structure::Structure;
+use crate::model::substructures::Substructured;
 use crate::outputs::{Record, RunResult};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Validates, assembles and integrates one configuration.
 pub fn simulate(cfg: &Config, profile: &Profile, cancel: Option<&Control>) -> Result<RunResult> {
     simulate_with(cfg, profile, None, cancel)
 }
 
+/// What a configuration's structure is reduced to before it runs, built once (by the Python
+/// layer) and shared by every job on it.
+#[derive(Clone, Copy, Debug)]
+pub enum Reduced<'r> {
+    /// Complex modes and the rail's residual (`discretisation.synthesis_cutoff`): the
+    /// synthesis engine.
+    Modes(&'r Reduction),
+    /// Substructured coordinates (`discretisation.substructure_cutoff`): the Newmark engine
+    /// on them.
+    Substructures(&'r Arc<Substructured>),
+}
+
 /// `simulate` with the structure's reduction, which a configuration with
-/// `discretisation.synthesis_cutoff` needs.
+/// `discretisation.synthesis_cutoff` or `substructure_cutoff` needs.
 pub fn simulate_with(
     cfg: &Config,
     profile: &Profile,
-    reduction: Option<&Reduction>,
+    reduced: Option<Reduced>,
     cancel: Option<&Control>,
 ) -> Result<RunResult> {
     let model = check::validated(cfg.clone(), profile.clone())?;
-    match engine(cfg, reduction)? {
-        Some(red) => synthesis::run(
+    match engine(cfg, reduced)? {
+        Some(Reduced::Modes(red)) => synthesis::run(
             &model,
             &LaneSpec::of(cfg, profile),
             red,
             Record::Full,
             cancel,
         ),
+        Some(Reduced::Substructures(sub)) => {
+            let structure = model.structure.substructured(Arc::clone(sub))?;
+            let model = Model::with_structure(model.cfg, model.profile, structure);
+            Simulation::new(&model)?.run(cancel)
+        }
         None => Simulation::new(&model)?.run(cancel),
     }
 }
 
-/// The reduction a configuration runs on (`None`: the Newmark engine); a synthesis without
-/// its reduction, or a reduction for a configuration without synthesis, is refused.
-fn engine<'r>(cfg: &Config, reduction: Option<&'r Reduction>) -> Result<Option<&'r Reduction>> {
-    match (cfg.discretisation.synthesis_cutoff, reduction) {
-        (Some(_), Some(r)) => Ok(Some(r)),
-        (None, None) => Ok(None),
-        (Some(fc), None) => Err(VtbError::config(
+/// The reduction a configuration runs on (`None`: the Newmark engine on its own structure); a
+/// cut-off without its reduction, or a reduction the configuration does not ask for, is
+/// refused.
+fn engine<'r>(cfg: &Config, reduced: Option<Reduced<'r>>) -> Result<Option<Reduced<'r>>> {
+    let d = &cfg.discretisation;
+    let asked = match (d.synthesis_cutoff, d.substructure_cutoff) {
+        (Some(fc), _) => Some((
             "discretisation.synthesis_cutoff",
             fc,
             "the synthesis needs the structure's reduction (vtb.synthesis.reduction(config))",
         )),
-        (None, Some(_)) => Err(VtbError::config(
-            "discretisation.synthesis_cutoff",
+        (None, Some(fc)) => Some((
+            "discretisation.substructure_cutoff",
+            fc,
+            "the substructured engine needs the structure's substructures (vtb.run.substructures.reduction(config))",
+        )),
+        (None, None) => None,
+    };
+    match (asked, reduced) {
+        (None, None) => Ok(None),
+        (Some(("discretisation.synthesis_cutoff", ..)), Some(r @ Reduced::Modes(_)))
+        | (Some(("discretisation.substructure_cutoff", ..)), Some(r @ Reduced::Substructures(_))) => {
+            Ok(Some(r))
+        }
+        (Some((field, fc, why)), None) => Err(VtbError::config(field, fc, why)),
+        (_, Some(r)) => Err(VtbError::config(
+            match r {
+                Reduced::Modes(_) => "discretisation.synthesis_cutoff",
+                Reduced::Substructures(_) => "discretisation.substructure_cutoff",
+            },
             "None",
-            "a reduction was given for a configuration that does not ask for the synthesis",
+            "a reduction was given for a configuration that does not ask for it",
         )),
     }
 }
@@ -125,13 +160,13 @@ pub fn run_batch(
 pub fn run_batch_with(
     jobs: &[Job],
     opts: BatchOptions,
-    reduction: Option<&Reduction>,
+    reduced: Option<Reduced>,
     cancel: Option<&Control>,
     done: Option<&AtomicUsize>,
 ) -> Vec<Result<RunResult>> {
     let out: Mutex<Vec<Option<Result<RunResult>>>> =
         Mutex::new((0..jobs.len()).map(|_| None).collect());
-    run_batch_each(jobs, opts, reduction, cancel, &|finished| {
+    run_batch_each(jobs, opts, reduced, cancel, &|finished| {
         if let Some(d) = done {
             d.fetch_add(finished.len(), Ordering::Relaxed);
         }
@@ -156,7 +191,7 @@ pub type Sink<'a> = &'a (dyn Fn(Vec<(usize, Result<RunResult>)>) + Sync);
 pub fn run_batch_each(
     jobs: &[Job],
     opts: BatchOptions,
-    reduction: Option<&Reduction>,
+    reduced: Option<Reduced>,
     cancel: Option<&Control>,
     sink: Sink,
 ) {
@@ -166,7 +201,7 @@ pub fn run_batch_each(
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, job) in jobs.iter().enumerate() {
         if let Err(e) = check::validate(&job.config, &job.profile)
-            .and_then(|_| engine(&job.config, reduction).map(|_| ()))
+            .and_then(|_| engine(&job.config, reduced).map(|_| ()))
         {
             refused.push((i, Err(e)));
             continue;
@@ -203,7 +238,12 @@ pub fn run_batch_each(
             let model = if cancelled() {
                 Err(VtbError::Cancelled)
             } else {
-                let structure = structures[s].get_or_init(|| Structure::build(&first.config));
+                let structure = structures[s].get_or_init(|| {
+                    Structure::build(&first.config).and_then(|st| match reduced {
+                        Some(Reduced::Substructures(sub)) => st.substructured(Arc::clone(sub)),
+                        _ => Ok(st),
+                    })
+                });
                 structure.clone().map(|st| {
                     Model::with_structure(first.config.clone(), (*first.profile).clone(), st)
                 })
@@ -218,7 +258,7 @@ pub fn run_batch_each(
                 let res = match &model {
                     Err(e) => vec![Err(e.clone()); chunk.len()],
                     Ok(_) if cancelled() => vec![Err(VtbError::Cancelled); chunk.len()],
-                    Ok(m) => run_lanes(m, jobs, chunk, record, reduction, cancel),
+                    Ok(m) => run_lanes(m, jobs, chunk, record, reduced, cancel),
                 };
                 sink(chunk.iter().copied().zip(res).collect());
             });
@@ -232,7 +272,7 @@ fn run_lanes(
     jobs: &[Job],
     chunk: &[usize],
     record: Record,
-    reduction: Option<&Reduction>,
+    reduced: Option<Reduced>,
     cancel: Option<&Control>,
 ) -> Vec<Result<RunResult>> {
     let lanes: Vec<LaneSpec> = chunk
@@ -243,20 +283,22 @@ fn run_lanes(
         model: &Model,
         lanes: &[LaneSpec],
         record: Record,
-        reduction: Option<&Reduction>,
+        reduced: Option<Reduced>,
         cancel: Option<&Control>,
     ) -> Vec<Result<RunResult>> {
-        let out = match reduction {
-            Some(red) => synthesis::run_lanes::<W>(model, lanes, red, record, cancel),
-            None => Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)),
+        let out = match reduced {
+            Some(Reduced::Modes(red)) => {
+                synthesis::run_lanes::<W>(model, lanes, red, record, cancel)
+            }
+            _ => Simulation::<W>::lanes(model, lanes, record).and_then(|s| s.run_lanes(cancel)),
         };
         out.unwrap_or_else(|e| vec![Err(e); W])
     }
     match lanes.len() {
-        1 => go::<1>(model, &lanes, record, reduction, cancel),
-        2 => go::<2>(model, &lanes, record, reduction, cancel),
-        4 => go::<4>(model, &lanes, record, reduction, cancel),
-        8 => go::<8>(model, &lanes, record, reduction, cancel),
+        1 => go::<1>(model, &lanes, record, reduced, cancel),
+        2 => go::<2>(model, &lanes, record, reduced, cancel),
+        4 => go::<4>(model, &lanes, record, reduced, cancel),
+        8 => go::<8>(model, &lanes, record, reduced, cancel),
         w => unreachable!("lane width {w}"),
     }
 }

@@ -16,7 +16,7 @@ pub mod newmark;
 pub mod synthesis;
 
 pub use batch::{
-    BatchOptions, Sink, model_key, run_batch, run_batch_each, run_batch_with, simulate,
+    BatchOptions, Reduced, Sink, model_key, run_batch, run_batch_each, run_batch_with, simulate,
     simulate_with,
 };
 

@@ -10,6 +10,7 @@ pub mod fesea;
 pub mod layers;
 pub mod resolution;
 pub mod structure;
+pub mod substructures;
 pub mod vehicle;
 
 use crate::config::{Config, Profile};

@@ -81,6 +81,11 @@ fn bloch_omega2(m: &[f64; 16], k: &[f64; 16], theta: f64) -> f64 {
 /// the response (the modes reach twice the band; docs/synthesis.md, receptance check).
 pub const SYNTHESIS_BAND_SHARE: f64 = 0.5;
 
+/// Share of the substructure cut-off f_c up to which the substructured coordinates hold the
+/// response: the interiors' modes reach twice the band, where the natural frequencies are
+/// within 2e-3 of the structure's (docs/substructures.md, the convergence table).
+pub const SUBSTRUCTURE_BAND_SHARE: f64 = 0.5;
+
 /// The x in (1e-6, hi) where an error rising with x reaches `tol` (bisection).
 fn crossing(err: impl Fn(f64) -> f64, tol: f64, hi: f64) -> f64 {
     let (mut lo, mut hi) = (1e-6, hi);
@@ -222,6 +227,9 @@ pub fn resolved_bands(cfg: &Config) -> Vec<LayerBand> {
             let mut basis_f_max = continuous_omega2(&layer, k_max).sqrt() / (2.0 * PI);
             if let Some(fc) = synthesis {
                 basis_f_max = basis_f_max.min(SYNTHESIS_BAND_SHARE * fc);
+            }
+            if let Some(fc) = cfg.discretisation.substructure_cutoff {
+                basis_f_max = basis_f_max.min(SUBSTRUCTURE_BAND_SHARE * fc);
             }
             LayerBand {
                 layer: lc.name.clone(),

@@ -4,13 +4,16 @@
 use crate::config::DamperParams;
 use crate::config::fields::on_interval;
 use crate::config::{Config, CouplingKind, GROUND, Method};
-use crate::error::Result;
+use crate::error::{Result, VtbError};
 use crate::linalg::sparse::{Assembler, CsrMatrix};
 use crate::model::basis::{LayerBasis, ModalBasis, Shape};
 use crate::model::couplings::{add_continuous, add_discrete};
 use crate::model::dampers::{Attachment, stamp};
 use crate::model::fesea::FeSea;
 use crate::model::layers::{Derivative, Layer, gram_blocks};
+use crate::model::substructures::Substructured;
+use std::cell::RefCell;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct Structure {
@@ -31,6 +34,14 @@ pub struct Structure {
     /// `solver.edge_ramp` (m): over how much of each end of the rail a wheel's force is
     /// handed to the rigid track beyond (`edge_share`).
     pub edge_ramp: f64,
+    /// Substructured coordinates (`substructured`): the matrices and every shape vector are
+    /// then in T's reduced DOFs; `layers` still evaluate the finite-element shapes T maps.
+    pub reduced: Option<Arc<Substructured>>,
+}
+
+thread_local! {
+    /// A layer shape on its way to substructured coordinates (no allocation per call).
+    static LAYER_SHAPE: RefCell<Shape> = RefCell::new(Shape::default());
 }
 
 impl Structure {
@@ -123,6 +134,7 @@ impl Structure {
             dampers: Vec::new(),
             base: None,
             edge_ramp: cfg.solver.edge_ramp,
+            reduced: None,
         };
         let [m, k, c] = [am, ak, ac].map(Assembler::finish);
         structure.dampers = structure.damper_attachments(cfg, n_layers);
@@ -143,6 +155,101 @@ impl Structure {
             Some([m, k, c]) => (m, c, k),
             None => (&self.m, &self.c, &self.k),
         }
+    }
+
+    /// This structure in the substructured coordinates of `sub` (built on its layers' DOFs):
+    /// the reduced matrices, the dampers stamped on their reduced shapes (their nodes after the
+    /// reduced DOFs), every later shape vector reduced. Refused when `sub` maps another number
+    /// of DOFs, or the rail is hybrid (its correction acts on the modal DOFs).
+    pub fn substructured(&self, sub: Arc<Substructured>) -> Result<Self> {
+        let n_layers: usize = self.layers.iter().map(Layer::n_dofs).sum();
+        if sub.layer_dofs() != n_layers {
+            return Err(VtbError::config(
+                "substructures",
+                sub.layer_dofs(),
+                format!("maps another structure: this one has {n_layers} layer DOFs"),
+            ));
+        }
+        if self.fesea.is_some() {
+            return Err(VtbError::config(
+                "discretisation.method",
+                "hybrid",
+                "substructures reduce a finite-element structure (\"fem\")",
+            ));
+        }
+        let reduce = |s: &Shape| {
+            let mut out = Shape::default();
+            sub.reduce_shape(s.start, &s.values, &mut out);
+            out
+        };
+        let dampers: Vec<Attachment> = self
+            .dampers
+            .iter()
+            .enumerate()
+            .map(|(i, a)| Attachment {
+                upper: reduce(&a.upper),
+                lower: reduce(&a.lower),
+                node: sub.n + i,
+                params: a.params,
+            })
+            .collect();
+        let n = sub.n + dampers.len();
+        let (m, k, c, base) = if dampers.is_empty() {
+            (sub.m.clone(), sub.k.clone(), sub.c.clone(), None)
+        } else {
+            let params: Vec<DamperParams> = dampers.iter().map(|a| a.params).collect();
+            let [m, k, c] = stamp([&sub.m, &sub.k, &sub.c], n, &dampers, &params);
+            (m, k, c, Some([sub.m.clone(), sub.k.clone(), sub.c.clone()]))
+        };
+        Ok(Self {
+            length: self.length,
+            layers: self.layers.clone(),
+            n_dofs: n,
+            m,
+            k,
+            c,
+            fesea: None,
+            dampers,
+            base,
+            edge_ramp: self.edge_ramp,
+            reduced: Some(sub),
+        })
+    }
+
+    /// `out` holds a layer shape: in substructured coordinates, replace it by its reduction.
+    #[inline]
+    fn to_reduced(&self, out: &mut Shape) {
+        if let Some(sub) = &self.reduced {
+            LAYER_SHAPE.with_borrow_mut(|layer| {
+                std::mem::swap(layer, out);
+                sub.reduce_shape(layer.start, &layer.values, out);
+            });
+        }
+    }
+
+    /// The DOFs a contact force may act on: the rail's, or every reduced DOF.
+    pub fn contact_dofs(&self) -> Vec<usize> {
+        match &self.reduced {
+            Some(sub) => (0..sub.n).collect(),
+            None => (0..self.layers[0].n_dofs())
+                .map(|k| self.layers[0].offset + k)
+                .collect(),
+        }
+    }
+
+    /// Entries of the rail's shape vectors (the stepper's port length).
+    pub fn port_len(&self) -> usize {
+        match &self.reduced {
+            Some(sub) => sub.widest,
+            None => self.layers[0].basis.shape_len(),
+        }
+    }
+
+    /// The bending-moment shape vector of layer `layer` at x (`Layer::moment_shape`).
+    pub fn moment_shape(&self, layer: usize, x: f64) -> Shape {
+        let mut s = self.layers[layer].moment_shape(x);
+        self.to_reduced(&mut s);
+        s
     }
 
     /// The dampers of every group (docs/dampers.md), in `Config::damper_groups` order: DOF
@@ -184,6 +291,9 @@ impl Structure {
     /// it fills O(n), and the columns of A⁻¹ the contact needs are short windows (they decay
     /// along the track). `None` when a layer is modal (its DOFs span the whole length).
     pub fn length_order(&self) -> Option<Vec<usize>> {
+        if let Some(sub) = &self.reduced {
+            return Some((0..sub.n).collect()); // numbered along the track already
+        }
         let mut keyed = Vec::with_capacity(self.n_dofs);
         for (li, l) in self.layers.iter().enumerate() {
             let LayerBasis::Fem(mesh) = &l.basis else {
@@ -203,6 +313,9 @@ impl Structure {
     /// finite-element meshes with the same nodes: the grouping in which the matrices are block
     /// tridiagonal.
     pub fn node_blocks(&self) -> Option<Vec<Vec<usize>>> {
+        if self.reduced.is_some() {
+            return None;
+        }
         let meshes: Vec<&[f64]> = self
             .layers
             .iter()
@@ -232,6 +345,12 @@ impl Structure {
     /// The rail (layer 0) of a hybrid model uses the FE–SEA-corrected cubic functions g̃.
     #[inline]
     pub fn shape_into(&self, layer: usize, x: f64, out: &mut Shape) {
+        self.layer_shape_into(layer, x, out);
+        self.to_reduced(out);
+    }
+
+    /// `shape_into` in the layers' own DOFs (no substructured reduction).
+    fn layer_shape_into(&self, layer: usize, x: f64, out: &mut Shape) {
         // `out` may hold another layer's shape: layers of a modal basis differ in length.
         out.values.resize(self.layers[layer].basis.shape_len(), 0.0);
         self.layers[layer].shape_into(x, out);
@@ -250,6 +369,7 @@ impl Structure {
         out.values.resize(l.basis.shape_len(), 0.0);
         let done = l.basis.eval_slope(x, out);
         out.start += l.offset;
+        self.to_reduced(out);
         done
     }
 
@@ -260,6 +380,7 @@ impl Structure {
         {
             fs.correct_shape(x, &mut s.values);
         }
+        self.to_reduced(&mut s);
         s
     }
 
@@ -290,6 +411,7 @@ impl Structure {
         if s != 1.0 {
             out.values.iter_mut().for_each(|v| *v *= s);
         }
+        self.to_reduced(out);
     }
 
     /// The share (0–1) of a wheel's force at x that the rail carries: 0 off the rail, rising
@@ -313,10 +435,7 @@ impl Structure {
     fn wheel_shape_on_rail(&self, x: f64, patch: f64, out: &mut Shape) {
         match &self.layers[0].basis {
             LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_into(x, patch, out),
-            _ => {
-                out.values.resize(self.layers[0].basis.shape_len(), 0.0);
-                self.shape_into(0, x, out);
-            }
+            _ => self.layer_shape_into(0, x, out),
         }
     }
 
@@ -328,15 +447,25 @@ impl Structure {
         let (a, b) = l.extent();
         let x = on_interval(x, a, b).unwrap_or(x);
         let s = self.edge_share(x);
-        s * s
-            * match &l.basis {
-                LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
-                _ => self.local_flexibility(0, x),
-            }
+        let element = match &l.basis {
+            LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
+            _ => self.local_flexibility(0, x),
+        };
+        // Substructured: also what the interior's truncated modes held statically.
+        let truncated = self.reduced.as_ref().map_or(0.0, |sub| {
+            LAYER_SHAPE.with_borrow_mut(|shape| {
+                self.wheel_shape_on_rail(x, patch, shape);
+                sub.residual(shape.start, &shape.values)
+            })
+        });
+        s * s * (element + truncated)
     }
 
     /// Entries a wheel's shape vector may need (`wheel_shape_into`).
     pub fn wheel_shape_len(&self, patch: f64) -> usize {
+        if let Some(sub) = &self.reduced {
+            return sub.widest;
+        }
         match &self.layers[0].basis {
             LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_len(patch),
             b => b.shape_len(),

@@ -116,6 +116,93 @@ impl Reduction {
     }
 }
 
+/// A structure's substructured coordinates held by the core (built by
+/// `vtb.run.substructures`): shared by every run that is given it.
+#[pyclass(frozen, module = "vtb._core")]
+pub(crate) struct Substructures(Arc<vtb::model::substructures::Substructured>);
+
+#[pymethods]
+impl Substructures {
+    /// From the Python layer's parts (`vtb::model::substructures::Parts`, field by field);
+    /// `matrices` is ((rows, cols, values) of M, C, K); `residual` each group's rows ×
+    /// (`residual_band` + 1) band of its residual flexibility, one group after another.
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        dof_piece: PyReadonlyArray1<'_, i64>,
+        dof_index: PyReadonlyArray1<'_, i64>,
+        piece_group: Vec<usize>,
+        piece_modes: Vec<usize>,
+        bound_ptr: Vec<usize>,
+        bound: Vec<usize>,
+        group_rows: Vec<usize>,
+        group_modes: Vec<usize>,
+        group_bound: Vec<usize>,
+        phi: PyReadonlyArray1<'_, f64>,
+        psi: PyReadonlyArray1<'_, f64>,
+        n: usize,
+        matrices: [(Vec<usize>, Vec<usize>, PyReadonlyArray1<'_, f64>); 3],
+        residual: PyReadonlyArray1<'_, f64>,
+        residual_band: usize,
+    ) -> PyResult<Self> {
+        let parts = vtb::model::substructures::Parts {
+            dof_piece: dof_piece.as_array().to_vec(),
+            dof_index: dof_index.as_array().to_vec(),
+            piece_group,
+            piece_modes,
+            bound_ptr,
+            bound,
+            group_rows,
+            group_modes,
+            group_bound,
+            phi: phi.as_array().to_vec(),
+            psi: psi.as_array().to_vec(),
+            n,
+            matrices: matrices.map(|(r, c, v)| (r, c, v.as_array().to_vec())),
+            residual: residual.as_array().to_vec(),
+            residual_band,
+        };
+        vtb::model::substructures::Substructured::new(parts)
+            .map(|s| Self(Arc::new(s)))
+            .map_err(|e| to_py_err(py, e))
+    }
+
+    /// Reduced DOFs (the layers').
+    #[getter]
+    fn n(&self) -> usize {
+        self.0.n
+    }
+}
+
+/// A run's reduction as handed in: a `Reduction` or `Substructures` (or None).
+enum Held {
+    Modes(Arc<vtb::engine::synthesis::Reduction>),
+    Substructures(Arc<vtb::model::substructures::Substructured>),
+}
+
+impl Held {
+    fn of(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Self>> {
+        let Some(obj) = obj else { return Ok(None) };
+        if let Ok(r) = obj.cast::<Reduction>() {
+            return Ok(Some(Held::Modes(Arc::clone(&r.get().0))));
+        }
+        if let Ok(s) = obj.cast::<Substructures>() {
+            return Ok(Some(Held::Substructures(Arc::clone(&s.get().0))));
+        }
+        Err(pyo3::exceptions::PyTypeError::new_err(
+            "reduction must be a vtb._core.Reduction or vtb._core.Substructures",
+        ))
+    }
+
+    fn as_reduced(&self) -> vtb::Reduced<'_> {
+        match self {
+            Held::Modes(r) => vtb::Reduced::Modes(r),
+            Held::Substructures(s) => vtb::Reduced::Substructures(s),
+        }
+    }
+}
+
 /// Runs one configuration; returns a dict of histories and metrics. `progress(done, total)`
 /// (steps) is called from the calling thread every 50 ms while it runs.
 #[pyfunction]
@@ -128,19 +215,19 @@ pub(crate) fn simulate<'py>(
     profile_dx: f64,
     profile: Option<PyReadonlyArray1<'_, f64>>,
     treads: Vec<PyReadonlyArray1<'_, f64>>,
-    reduction: Option<&Reduction>,
+    reduction: Option<Bound<'py, PyAny>>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = parse_config(py, config_json)?;
     let p = make_profile(profile_x0, profile_dx, profile, treads)?;
-    let red = reduction.map(|r| Arc::clone(&r.0));
+    let red = Held::of(reduction.as_ref())?;
     let out = run_detached(
         py,
         |_, control| match &progress {
             Some(f) => f.call1(control.progress()).map(|_| ()),
             None => Ok(()),
         },
-        |control| vtb::simulate_with(&cfg, &p, red.as_deref(), Some(control)),
+        |control| vtb::simulate_with(&cfg, &p, red.as_ref().map(Held::as_reduced), Some(control)),
     )?;
     let r = out.map_err(|e| to_py_err(py, e))?;
     result_to_dict(py, r)
@@ -164,10 +251,10 @@ pub(crate) fn batch<'py>(
     progress: Option<Bound<'py, PyAny>>,
     histories: bool,
     max_lanes: usize,
-    reduction: Option<&Reduction>,
+    reduction: Option<Bound<'py, PyAny>>,
     on_result: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let red = reduction.map(|r| Arc::clone(&r.0));
+    let red = Held::of(reduction.as_ref())?;
     if configs.len() != profile_index.len() {
         return Err(to_py_err(
             py,
@@ -250,7 +337,15 @@ pub(crate) fn batch<'py>(
                 .unwrap_or_else(|e| e.into_inner())
                 .append(&mut group);
         };
-        pool.install(|| vtb::run_batch_each(&jobs, opts, red.as_deref(), Some(cancel), &sink))
+        pool.install(|| {
+            vtb::run_batch_each(
+                &jobs,
+                opts,
+                red.as_ref().map(Held::as_reduced),
+                Some(cancel),
+                &sink,
+            )
+        })
     })?;
     let out = PyList::empty(py);
     for item in items {

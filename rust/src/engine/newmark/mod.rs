@@ -124,9 +124,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
         let contact_dofs: Vec<usize> = if model.cars.is_empty() {
             vec![]
         } else {
-            (0..st.layers[0].n_dofs())
-                .map(|k| st.layers[0].offset + k)
-                .collect()
+            st.contact_dofs()
         };
         crate::check::budget::check_histories(cfg, record, W)?;
         let (m, c, k) = st.stepping_matrices();
@@ -144,7 +142,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             k,
             dt,
             &contact_dofs,
-            st.layers[0].basis.shape_len(),
+            st.port_len(),
             numbering,
             &st.dampers,
         )?;
@@ -357,10 +355,18 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             }
         };
         self.track.set_state(j, &u0, &vec![0.0; n], &a0, k_l, m_l);
+        // Substructured: the wheel also stands on the static flexibility in series with its
+        // contact (the truncated interior modes' share is not small), so that it starts at rest.
+        let series = st.reduced.is_some() && self.element_flexibility;
         Ok((0..v.n_wheels())
             .map(|wi| {
                 st.wheel_shape_into(v.x0[wi], v.patch[wi], &mut self.wheel_shape);
-                dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..])
+                let under = if series {
+                    st.wheel_flexibility(v.x0[wi], v.patch[wi]) * v.loads[wi]
+                } else {
+                    0.0
+                };
+                dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..]) + under
             })
             .collect())
     }
@@ -376,11 +382,11 @@ fn observe_moments<const W: usize>(
     wanted: bool,
     points: &[f64],
 ) -> usize {
-    let Some(deck) = st.layers.last().filter(|_| wanted) else {
+    if !wanted || st.layers.is_empty() {
         return 0;
-    };
+    }
     for &x in points {
-        track.observe(&deck.moment_shape(x));
+        track.observe(&st.moment_shape(st.layers.len() - 1, x));
     }
     points.len()
 }
