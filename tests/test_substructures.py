@@ -95,3 +95,46 @@ def test_a_bad_method_or_a_structure_that_cannot_be_cut_is_refused():
     with pytest.raises(vtb.ConfigError, match="method"):
         vtb.modes(vtb.paper_config(), 20.0, method="substructured")  # the article's modal layers
     assert vtb.modes(vtb.paper_config(), 20.0).method == "shift-invert"
+
+
+# ---------------------------------------------------------------- the substructured engine
+def passage(simply_supported: bool, cutoff=None) -> vtb.Config:
+    """One CRH3 car at 80 m/s over 3 spans between 30 m embankments, long-wave irregularity."""
+    cfg = vtb.paper_config(model="fast")
+    cfg.discretisation.synthesis_cutoff = None
+    cfg.output.points = []
+    cfg = vtb.spans(cfg, [32.0] * 3, simply_supported=simply_supported)
+    cfg = vtb.track_zones(cfg, approach=30.0, exit=30.0, tail=0.1)
+    cfg.irregularity = vtb.Irregularity(kind="german_low", wavelength_min=1.0, wavelength_max=40.0, seed=1)
+    cfg.solver.dt = 2e-4
+    cfg.solver.fade_in = 20.0
+    cfg.output.band_limit = 150.0
+    cfg.discretisation.substructure_cutoff = cutoff
+    return cfg
+
+
+@pytest.fixture(scope="module", params=[True, False], ids=["simply-supported", "continuous"])
+def runs(request):
+    fem = vtb.simulate(passage(request.param), progress=False).metrics()
+    return fem, {fc: vtb.simulate(passage(request.param, fc), progress=False).metrics() for fc in (300.0, 1200.0)}
+
+
+def rel(a, b):
+    return abs(b - a) / abs(a)
+
+
+def test_the_deck_grade_gives_the_finite_elements_deck_within_1_and_2_percent(runs):
+    fem, sub = runs
+    for fc in (300.0, 1200.0):
+        assert rel(fem["deck_disp_max"], sub[fc]["deck_disp_max"]) < 0.01
+        assert rel(fem["deck_moment_max"], sub[fc]["deck_moment_max"]) < 0.01
+        assert rel(fem["deck_acc_max"], sub[fc]["deck_acc_max"]) < 0.02
+        assert rel(fem["car_comfort_aw"], sub[fc]["car_comfort_aw"]) < 0.01
+
+
+def test_the_contact_forces_converge_to_the_finite_elements(runs):
+    fem, sub = runs
+    for name in ("contact_force_max", "contact_force_min"):
+        errors = [rel(fem[name], sub[fc][name]) for fc in (300.0, 1200.0)]
+        assert errors[1] < 0.01, (name, errors)
+        assert errors[1] < errors[0] or errors[0] < 0.01, (name, errors)

@@ -108,6 +108,9 @@ pub enum Numbering<'a> {
     /// own, ordered along the track): both factors cost O(length), so the general search's
     /// costly trials are skipped.
     Order(&'a [usize]),
+    /// This elimination order, along the track (substructured coordinates): a port vector's
+    /// forward substitution then decays along it, which `Newmark::set_port_reach` uses.
+    Along(&'a [usize]),
 }
 
 /// Newmark stepper of one linear subsystem M·ü + C·u̇ + K·u = F for W jobs in lockstep
@@ -142,6 +145,9 @@ pub struct Newmark<const W: usize = 1> {
     /// Forward ports with force vectors: (k, L⁻¹·P·e_k from row k on) for the few unknowns k
     /// where force and displacement vectors differ.
     units: Vec<(usize, Vec<f64>)>,
+    /// Rows past a forward port's last entry that its forward substitution keeps
+    /// (`set_port_reach`; unbounded by default).
+    port_reach: usize,
     y1: Vec<f64>,
     y2: Vec<f64>,
     obs: Vec<SVec>,
@@ -196,6 +202,7 @@ impl<const W: usize> Newmark<W> {
                             along
                         }
                     }
+                    Numbering::Along(order) => Ldlt::with_ordering(&a, Some(order))?,
                     _ => Ldlt::for_stepping(&a, ports)?,
                 };
                 let mk = SymOperator::new(&[m, k], &factor.perm);
@@ -231,6 +238,7 @@ impl<const W: usize> Newmark<W> {
             z: vec![0.0; n * W],
             columns: column_ports.then(std::collections::HashMap::new),
             units: Vec::new(),
+            port_reach: usize::MAX,
             y1: vec![0.0; n * W],
             y2: vec![0.0; n * W],
             obs: Vec::new(),
@@ -270,6 +278,13 @@ impl<const W: usize> Newmark<W> {
     }
 
     /// Registers an observation vector (original numbering); returns its index.
+    /// Keeps a forward port's L⁻¹n only over `reach` unknowns past its last entry: where the
+    /// numbering runs along the track (`Numbering::Along`), L⁻¹n decays along it, so the rows
+    /// beyond hold nothing a step needs (the substructured engine: a few substructures on).
+    pub fn set_port_reach(&mut self, reach: usize) {
+        self.port_reach = reach;
+    }
+
     pub fn observe(&mut self, shape: &Shape) -> usize {
         let v = self.vector(shape);
         self.obs.push(v);

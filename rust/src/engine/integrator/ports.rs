@@ -111,9 +111,11 @@ pub struct PortBlock<const W: usize = 1> {
     /// L⁻¹·P·n_c at `[k·GW + c]`, and L⁻¹·P·f_c from row `fstart` on (forward ports).
     cols: Vec<f64>,
     cols_f: Vec<f64>,
-    /// First nonzero row in elimination order of `cols` and of `cols_f − cols`.
+    /// First nonzero row in elimination order of `cols` and of `cols_f − cols`, and the end
+    /// of the rows kept of `cols` (`Newmark::set_port_reach`; the unknowns' count otherwise).
     start: usize,
     fstart: usize,
+    end: usize,
     /// With dampers: n_c·y_a and f_c·y_a per damper a, and (S⁻¹·Yᵀ·f_c)_a per damper and lane
     /// (S depends on the lane's damper parameters).
     ny: Vec<[f64; GW]>,
@@ -133,6 +135,7 @@ impl<const W: usize> PortBlock<W> {
             cols_f: Vec::new(),
             start: n,
             fstart: n,
+            end: n,
             ny: Vec::new(),
             fy: Vec::new(),
             sfy: Vec::new(),
@@ -224,17 +227,24 @@ impl<const W: usize> Newmark<W> {
             return;
         }
         let s = ports.start.min(self.ns);
-        ports.cols[s * GW..].fill(0.0);
+        // The last step's window and the partial sums it spilled past its end.
+        let spill = self.engine.sparse().spill(ports.end).max(s);
+        ports.cols[s * GW..spill * GW].fill(0.0);
         ports.start = self.ns;
+        let mut last = 0;
         for (c, v) in ports.vecs.iter().enumerate() {
             for (&i, &val) in v.idx.iter().zip(&v.val) {
                 ports.cols[i * GW + c] = val;
                 ports.start = ports.start.min(i);
+                last = last.max(i + 1);
             }
         }
-        self.engine
-            .sparse()
-            .forward::<GW>(&mut ports.cols[..self.ns * GW], ports.start);
+        ports.end = self.ns.min(last.saturating_add(self.port_reach));
+        self.engine.sparse().forward_until::<GW>(
+            &mut ports.cols[..self.ns * GW],
+            ports.start,
+            ports.end,
+        );
         // L⁻¹·f = L⁻¹·n + Σ_k (f − n)_k·L⁻¹·e_k over the few entries where they differ.
         ports.fstart = self.ns;
         let Some(force) = &ports.force else {
@@ -303,7 +313,7 @@ impl<const W: usize> Newmark<W> {
         }
         let d = self.engine.sparse().d_inv();
         let mut acc = [[0.0; GW]; W];
-        for k in ports.start..self.ns {
+        for k in ports.start..ports.end {
             let r = &ports.cols[k * GW..k * GW + GW];
             for (lane, a) in acc.iter_mut().enumerate() {
                 let w = d[k] * self.z[k * W + lane];
@@ -340,7 +350,7 @@ impl<const W: usize> Newmark<W> {
         } else {
             let d = self.engine.sparse().d_inv();
             let mut g = [[0.0; GW]; GW];
-            for k in a.start.max(b.start)..self.ns {
+            for k in a.start.max(b.start)..a.end.min(b.end) {
                 let (ra, rb) = (&a.cols[k * GW..k * GW + GW], b.force_row(k));
                 for r in 0..GW {
                     let ar = ra[r] * d[k];
@@ -380,7 +390,7 @@ impl<const W: usize> Newmark<W> {
             }
             return;
         }
-        for k in ports.start..self.ns {
+        for k in ports.start..ports.end {
             let r = ports.force_row(k);
             for (lane, wl) in w.iter().enumerate() {
                 let mut s = 0.0;

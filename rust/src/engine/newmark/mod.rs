@@ -54,6 +54,11 @@ pub(super) struct NewmarkSide<'m, const W: usize> {
     n_moments: usize,
 }
 
+/// How many substructures' columns past a wheel's own the substructured engine keeps of its
+/// port's forward substitution (`Newmark::set_port_reach`): L⁻¹n has decayed by then
+/// (docs/substructures.md measures the truncation).
+const PORT_REACH_PIECES: usize = 3;
+
 /// W coupled runs of one model on the Newmark engine.
 pub struct Simulation<'m, const W: usize = 1> {
     model: &'m Model,
@@ -133,6 +138,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
         let (blocks, order) = (st.node_blocks(), st.length_order());
         let numbering = match (&blocks, &order) {
             (Some(b), _) => Numbering::Blocks(b),
+            (None, Some(o)) if st.reduced.is_some() => Numbering::Along(o),
             (None, Some(o)) => Numbering::Order(o),
             (None, None) => Numbering::Search,
         };
@@ -146,6 +152,9 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             numbering,
             &st.dampers,
         )?;
+        if let Some(sub) = &st.reduced {
+            track.set_port_reach(PORT_REACH_PIECES * sub.widest);
+        }
         for lane in lanes {
             if lane.dampers.len() != st.dampers.len() {
                 return Err(VtbError::config(

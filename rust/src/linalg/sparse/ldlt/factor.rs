@@ -85,6 +85,7 @@ impl Ldlt {
             lbb: parts.lbb,
             d_inv: parts.d_inv,
             nnz: li.len() - n,
+            touch: Default::default(),
         })
     }
 
@@ -107,6 +108,7 @@ impl Ldlt {
             lbb: vec![],
             d_inv: vec![],
             nnz: 0,
+            touch: Default::default(),
         }
     }
 }

@@ -49,6 +49,9 @@ pub struct Ldlt {
     lbb: Vec<f64>,
     d_inv: Vec<f64>,
     nnz: usize,
+    /// `touch[k]`: one past the last row any interior column ≤ k writes (`spill`), made on
+    /// first use.
+    touch: std::sync::OnceLock<Vec<usize>>,
 }
 
 /// A group of interior columns of L.
@@ -75,9 +78,68 @@ impl Unit {
             Unit::Columns { to, .. } => to,
         }
     }
+
+    fn start(&self) -> usize {
+        match *self {
+            Unit::Segment { k0, .. } => k0,
+            Unit::Columns { from, .. } => from,
+        }
+    }
 }
 
 impl Ldlt {
+    /// One past the last row that `forward_until(_, _, end)` writes: its interior columns
+    /// before `end` scatter into rows up to there, and a window into the border rows writes
+    /// them all (partial sums a caller must clear).
+    pub fn spill(&self, end: usize) -> usize {
+        if end == 0 {
+            return 0;
+        }
+        if end > self.p {
+            return self.n; // the border rows too
+        }
+        let touch = self.touch.get_or_init(|| {
+            let mut last = vec![0usize; self.n];
+            for unit in &self.units {
+                match *unit {
+                    Unit::Segment {
+                        k0,
+                        len,
+                        off,
+                        n_off,
+                        ..
+                    } => {
+                        let o = self.seg_off[off..off + n_off]
+                            .iter()
+                            .copied()
+                            .max()
+                            .unwrap_or(0);
+                        for j in 0..len {
+                            last[k0 + j] = (k0 + j + o + 1).min(self.n);
+                        }
+                    }
+                    Unit::Columns { from, to } => {
+                        for k in from..to {
+                            let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
+                            last[k] = self.row_idx[a..b]
+                                .iter()
+                                .map(|&r| r as usize + 1)
+                                .max()
+                                .unwrap_or(k + 1);
+                        }
+                    }
+                }
+            }
+            let mut run = 0;
+            for (k, v) in last.iter_mut().enumerate() {
+                run = run.max(*v).max(k + 1);
+                *v = run;
+            }
+            last
+        });
+        touch[end.min(self.n) - 1]
+    }
+
     /// Number of off-diagonal entries of L.
     pub fn nnz_l(&self) -> usize {
         self.nnz

@@ -10,16 +10,23 @@ impl Ldlt {
     /// operations of a single right-hand side (`simd::dot_lanes`).
     #[inline]
     pub fn forward<const W: usize>(&self, z: &mut [f64], start: usize) {
+        self.forward_until::<W>(z, start, self.n);
+    }
+
+    /// `forward` through the columns before `end` only: rows from `end` on are left partial
+    /// (a caller that reads L⁻¹z only before `end`, where it has decayed, saves the rest).
+    #[inline]
+    pub fn forward_until<const W: usize>(&self, z: &mut [f64], start: usize, end: usize) {
         assert_eq!(z.len(), W * self.n);
-        crate::wide!(<W> (this: &Ldlt = self, z: &mut [f64] = z, start: usize = start) {
-            this.forward_kernel::<W>(z, start)
+        crate::wide!(<W> (this: &Ldlt = self, z: &mut [f64] = z, start: usize = start, end: usize = end) {
+            this.forward_kernel::<W>(z, start, end)
         });
     }
 
     #[inline(always)]
-    fn forward_kernel<const W: usize>(&self, z: &mut [f64], start: usize) {
+    fn forward_kernel<const W: usize>(&self, z: &mut [f64], start: usize, end: usize) {
         for unit in &self.units {
-            if unit.end() <= start {
+            if unit.end() <= start || unit.start() >= end {
                 continue;
             }
             match *unit {
@@ -44,7 +51,7 @@ impl Ldlt {
                     }
                 }
                 Unit::Columns { from, to } => {
-                    for k in from.max(start)..to {
+                    for k in from.max(start)..to.min(end) {
                         let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
                         let mut zk = [0.0; W];
                         zk.copy_from_slice(&z[k * W..k * W + W]);
@@ -64,8 +71,9 @@ impl Ldlt {
                 }
             }
         }
-        // Border rows as dot products over their runs, then the dense border triangle.
-        let (pb, nb) = (self.p, self.n - self.p);
+        // Border rows as dot products over their runs, then the dense border triangle (none
+        // when the window ends before them: they would read rows it left partial).
+        let (pb, nb) = (self.p, if end > self.p { self.n - self.p } else { 0 });
         for g in 0..nb {
             let mut acc = [0.0; W];
             for &(s, l, o) in &self.brun[self.brow_ptr[g]..self.brow_ptr[g + 1]] {
