@@ -9,7 +9,7 @@ import pytest
 import vtb
 from vtb import cli
 
-NAMES = ["article", "article_converged", "article_fast", "article_fem", "article_tids", "passage_fast", "two_span_sato"]
+NAMES = ["article", "article_converged", "article_fast", "article_fem", "article_tids", "passage_fast", "passage_long", "two_span_sato"]
 
 
 def _close(a, b):
@@ -75,6 +75,13 @@ def test_the_fast_examples_are_the_fast_preset_and_a_passage_on_it():
     assert p.discretisation.synthesis_cutoff == 300.0 and p.solver.dt == 2e-4
     assert vtb.resolved_band(p).rail.f_max >= p.output.band_limit
     assert p.vehicles[0].x_front < 0 and p.structure.length == 156.0
+
+
+def test_the_long_passage_runs_on_the_substructured_engine_at_the_deck_grade():
+    p = vtb.example_config("passage_long")
+    assert p.discretisation.substructure_cutoff == 300.0 and p.discretisation.synthesis_cutoff is None
+    assert p.structure.length == 840.0 and len(p.vehicles) == 8 and p.solver.dt == 2e-4
+    assert vtb.resolved_band(p).rail.f_max >= p.output.band_limit
 
 
 def test_unknown_example_names_the_field():

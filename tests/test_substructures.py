@@ -2,6 +2,7 @@
 of the same finite-element structure: a 5-span viaduct between embankments, simply supported
 and continuous."""
 
+import copy
 import math
 
 import numpy as np
@@ -105,7 +106,7 @@ def passage(simply_supported: bool, cutoff=None) -> vtb.Config:
     cfg.output.points = []
     cfg = vtb.spans(cfg, [32.0] * 3, simply_supported=simply_supported)
     cfg = vtb.track_zones(cfg, approach=30.0, exit=30.0, tail=0.1)
-    cfg.irregularity = vtb.Irregularity(kind="german_low", wavelength_min=1.0, wavelength_max=40.0, seed=1)
+    cfg.irregularity = vtb.Irregularity(kind="german_low", wavelength_min=1.0, wavelength_max=30.0, seed=1)
     cfg.solver.dt = 2e-4
     cfg.solver.fade_in = 20.0
     cfg.output.band_limit = 150.0
@@ -138,3 +139,50 @@ def test_the_contact_forces_converge_to_the_finite_elements(runs):
         errors = [rel(fem[name], sub[fc][name]) for fc in (300.0, 1200.0)]
         assert errors[1] < 0.01, (name, errors)
         assert errors[1] < errors[0] or errors[0] < 0.01, (name, errors)
+
+
+def test_moving_forces_load_the_deck_as_on_the_finite_elements():
+    cfg = passage(True)
+    cfg.vehicles = []
+    cfg.irregularity = vtb.Irregularity()
+    cfg.forces = [vtb.MovingForce(magnitude=170e3, x0=x0) for x0 in (0.0, -3.0, -17.0, -20.0)]
+    fem = vtb.simulate(cfg, progress=False).metrics()
+    cfg.discretisation.substructure_cutoff = 300.0
+    sub = vtb.simulate(cfg, progress=False).metrics()
+    for name in ("deck_disp_max", "deck_moment_max"):
+        assert rel(fem[name], sub[name]) < 0.01, name
+    assert rel(fem["deck_acc_max"], sub["deck_acc_max"]) < 0.02
+
+
+def test_damper_designs_share_one_reduction_and_run_in_lockstep_as_alone():
+    cfg = passage(True, 300.0)
+    cfg.solver.tail, cfg.solver.t_end = None, 0.3
+    designs = []
+    for k in (1e8, 2e8, 4e8, 8e8):
+        c = copy.deepcopy(cfg)
+        c.dampers = [vtb.DamperGroup(kind="tvmd", inertance=5.0, stiffness=k, damping=1e3, positions=[40.0, 60.0, 80.0])]
+        designs.append(c)
+    batch = vtb.simulate_batch(designs, lanes=4, progress=False)
+    alone = [vtb.simulate(d, progress=False).metrics() for d in designs]
+    assert [b["rail_acc_max"] for b in batch] == [a["rail_acc_max"] for a in alone]
+    assert len({b["rail_acc_max"] for b in batch}) == 4
+    # the dampers act as on the finite elements
+    fem = copy.deepcopy(designs[1])
+    fem.discretisation.substructure_cutoff = None
+    ref = vtb.simulate(fem, progress=False).metrics()
+    assert rel(ref["deck_disp_max"], alone[1]["deck_disp_max"]) < 0.01
+    assert rel(ref["contact_force_max"], alone[1]["contact_force_max"]) < 0.05
+
+
+def test_a_substructured_run_refuses_a_bad_cutoff_or_a_modal_structure():
+    cfg = passage(True, -5.0)
+    with pytest.raises(vtb.ConfigError, match="substructure_cutoff"):
+        vtb.simulate(cfg, progress=False)
+    cfg = passage(True, 300.0)
+    cfg.discretisation.synthesis_cutoff = 300.0
+    with pytest.raises(vtb.ConfigError, match="substructure_cutoff"):
+        vtb.simulate(cfg, progress=False)
+    art = vtb.paper_config()
+    art.discretisation.substructure_cutoff = 300.0
+    with pytest.raises(vtb.ConfigError, match="substructure_cutoff|method"):
+        vtb.simulate(art, progress=False)

@@ -18,6 +18,11 @@ __version__: str = _core.__version__
 #: then; journals and checkpoints carry it and a resume across two epochs is refused.
 RESULTS_EPOCH: int = _core.RESULTS_EPOCH
 
+#: Shares of the synthesis and the substructure cut-offs the model resolves (the core's,
+#: model/resolution.rs).
+SYNTHESIS_BAND_SHARE: float = _core.SYNTHESIS_BAND_SHARE
+SUBSTRUCTURE_BAND_SHARE: float = _core.SUBSTRUCTURE_BAND_SHARE
+
 
 def schema() -> dict:
     """The core's JSON schema of a configuration: every field, type, default and description."""

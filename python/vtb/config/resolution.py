@@ -20,6 +20,7 @@ from typing import Optional
 import numpy as np
 
 from . import gateway
+from .gateway import SUBSTRUCTURE_BAND_SHARE, SYNTHESIS_BAND_SHARE
 from .fields import Config, structure_json
 from .irregularity import SPECTRA, band_variance
 from ..errors import config_error
@@ -179,6 +180,8 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> Non
         dt_need = dt * rail.time_f_max / f_exc if dt else None
         if config.discretisation.synthesis_cutoff is not None:
             grade = f"discretisation.synthesis_cutoff ≥ {f_exc / SYNTHESIS_BAND_SHARE:.0f} Hz"
+        elif getattr(config.discretisation, "substructure_cutoff", None) is not None:
+            grade = f"discretisation.substructure_cutoff ≥ {f_exc / SUBSTRUCTURE_BAND_SHARE:.0f} Hz"
         else:
             grade = "a rail basis that resolves it"
         step = f" with solver.dt ≤ {dt_need:.2g} s" if dt_need is not None and f_exc > rail.time_f_max else ""
@@ -193,6 +196,3 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> Non
         )
 
 
-#: Share of the synthesis cut-off the model resolves (the core's SYNTHESIS_BAND_SHARE,
-#: model/resolution.rs; the band itself comes from the core).
-SYNTHESIS_BAND_SHARE = 0.5

@@ -49,6 +49,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("SYNTHESIS_RESIDUAL_REACH", s::RESIDUAL_REACH)?;
         m.add("SYNTHESIS_RESIDUAL_TAPER", s::RESIDUAL_TAPER)?;
         m.add("SYNTHESIS_STEP_REACH", s::STEP_REACH)?;
+        m.add("SYNTHESIS_BAND_SHARE", s::SYNTHESIS_BAND_SHARE)?;
+        m.add("SUBSTRUCTURE_BAND_SHARE", s::SUBSTRUCTURE_BAND_SHARE)?;
     }
     m.add("MIN_BINS_PER_BAND", vtb::outputs::bands::MIN_BINS_PER_BAND)?;
     m.add("ACC_REFERENCE", vtb::outputs::bands::ACC_REFERENCE)?;
