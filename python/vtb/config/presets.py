@@ -34,7 +34,11 @@ def paper_irregularity(seed: int = PAPER_SEED, scale: float = 1.0) -> Irregulari
 
 
 #: Discretisations of :func:`paper_config`: the article's own, and the converged one.
-PAPER_MODELS = ("article", "converged", "fast")
+PAPER_MODELS = ("article", "converged", "fast", "deck")
+
+#: The deck grade's irregularity: the long-wave German spectrum over the wavelengths its 150 Hz
+#: band takes at the article's 80 m/s (v/λ ≤ 80 Hz), the longest an eighth of its 160 m.
+DECK_IRREGULARITY = {"kind": "german_low", "wavelength_min": 1.0, "wavelength_max": 20.0}
 
 
 def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = "article") -> Config:
@@ -67,12 +71,24 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
     docs/synthesis.md): its finite elements reduced once to the complex modes below 4 kHz plus
     the rail's residual (cached on disk), each mode stepped exactly at Δt = 5e-5 s. It
     is verified against the converged model (rail and slab indices within 3 %) at a fraction
-    of its cost; the first run builds the reduction (about two and a half minutes).
+    of its cost; the first run builds the reduction (about two and a half minutes). It is the
+    **rail grade**: rail vibration and damper design.
+
+    ``model="deck"``: the **deck grade** — the converged structure and car on the substructured
+    engine (:mod:`vtb.run.substructures`, docs/substructures.md): each substructure's
+    fixed-interface modes below 600 Hz and the DOFs on the cuts, Newmark at Δt = 2e-4 s, the
+    acceleration indices band-limited at 150 Hz, under the long-wave German spectrum
+    (:data:`DECK_IRREGULARITY`, 1–20 m; ``calibrated`` does not apply). Deck, ride comfort
+    and contact force, for long viaducts and trains (re-span it with :func:`vtb.spans` and
+    :func:`vtb.track_zones`); not the rail's vibration.
     """
     if model not in PAPER_MODELS:
         raise config_error("model", model, f"must be one of {PAPER_MODELS}")
-    cfg = Config.from_dict(gateway.preset({"article": "paper", "converged": "paper_converged", "fast": "paper_fast"}[model]))
-    cfg.irregularity = paper_irregularity(seed, PAPER_CALIBRATED_SCALE if calibrated else 1.0)
+    cfg = Config.from_dict(gateway.preset({"article": "paper", "converged": "paper_converged", "fast": "paper_fast", "deck": "paper_deck"}[model]))
+    if model == "deck":
+        cfg.irregularity = Irregularity(seed=seed, **DECK_IRREGULARITY)
+    else:
+        cfg.irregularity = paper_irregularity(seed, PAPER_CALIBRATED_SCALE if calibrated else 1.0)
     # ω_r follows the irregularity band and speed (800 Hz here) when either is changed.
     cfg.discretisation.omega_r = None
     return cfg
