@@ -199,3 +199,14 @@ def test_a_substructured_run_refuses_a_bad_cutoff_or_a_modal_structure():
     art.discretisation.substructure_cutoff = 300.0
     with pytest.raises(vtb.ConfigError, match="substructure_cutoff|method"):
         vtb.simulate(art, progress=False)
+
+
+def test_a_substructured_build_announces_itself_and_shows_its_substructures(capsys):
+    from vtb.run import substructures as built
+
+    cfg = passage(True, 450.0)  # a cut-off no other test builds: this process builds it here
+    built.reduction(cfg, progress=True)
+    err = capsys.readouterr().err
+    assert "reducing this structure" in err and "450 Hz" in err and "vtb substructures" in err
+    built.reduction(cfg, progress=True)  # built: nothing to say
+    assert capsys.readouterr().err == ""

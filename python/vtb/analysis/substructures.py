@@ -273,10 +273,11 @@ def _interior_modes(kii: sp.csc_matrix, mii: sp.csc_matrix, hi: float) -> tuple[
     return lam, phi
 
 
-def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SUBSTRUCTURE_LENGTH) -> Optional[Substructuring]:
+def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SUBSTRUCTURE_LENGTH,
+           progress=None) -> Optional[Substructuring]:
     """The substructured reduction of ``system`` for modes up to ``fmax`` (Hz), or None when the
-    structure cannot be cut (a modal layer, no position where every layer has a node, or a
-    matrix entry joining two interiors)."""
+    structure cannot be cut (a modal layer or no mesh to cut by). ``progress(done, total)`` is
+    told each substructure reduced (or recognised as one reduced already)."""
     pos = dof_positions(system)
     if pos is None:
         return None
@@ -332,6 +333,8 @@ def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SU
             found[fp] = len(groups)
             groups.append(Group(omega2, phi, psi.reshape(inner.size, bound.size)))
         raw.append((inner, bound, found[fp]))
+        if progress is not None:
+            progress(s + 1, n_sub)
     # The reduced DOFs along the track: substructure s's modes, then the DOFs on cut s.
     col = np.full(system.n, -1)
     offset = 0

@@ -330,7 +330,7 @@ def _reduction(config: Config, progress="auto", text: Optional[str] = None, prof
     if config.discretisation.substructure_cutoff is not None:
         if text is not None:
             gateway.validate(text, *profile)
-        return substructures.reduction(config).to_core()
+        return substructures.reduction(config, progress).to_core()
     if config.discretisation.synthesis_cutoff is None:
         return None
     if text is not None and not in_memory(config):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 import threading
 import time
 
@@ -44,9 +45,11 @@ def _structure(config: Config) -> Config:
     return dataclasses.replace(config, dampers=[])
 
 
-def reduction(config: Config) -> Built:
+def reduction(config: Config, progress="auto") -> Built:
     """The substructured reduction of ``config``'s structure (built on first use in this
-    process, then shared).
+    process, then shared). ``progress``: ``"auto"`` announces a build on stderr and shows a tqdm
+    bar of its substructures once it has lasted 2 s, on a terminal only; ``True`` anywhere;
+    ``False`` neither.
 
     Raises :class:`vtb.ConfigError` naming ``discretisation.substructure_cutoff`` when it is not
     set or not a finite frequency > 0, or when the structure cannot be cut (a modal or hybrid
@@ -63,7 +66,25 @@ def reduction(config: Config) -> Built:
             return _MEMORY[key]
         t0 = time.perf_counter()
         system = assemble(cfg)
-        sub = reduce(system, float(fc), ratio=1.0)
+        show = progress is True or (progress == "auto" and hasattr(sys.stderr, "isatty") and sys.stderr.isatty())
+        if progress is not False:
+            print(f"vtb: reducing this structure ({system.n} DOFs) to substructures below {fc:g} Hz once in this process",
+                  file=sys.stderr, flush=True)
+        bar = None
+        if show:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(desc="vtb substructures", unit="substructure", file=sys.stderr, delay=0.0 if progress is True else 2.0)
+
+        def note(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        try:
+            sub = reduce(system, float(fc), ratio=1.0, progress=note if bar is not None else None)
+        finally:
+            if bar is not None:
+                bar.close()
         if sub is None:
             raise config_error("discretisation.substructure_cutoff", fc, "the structure cannot be cut into substructures (every layer must be finite elements)")
         residual_bands(system, sub)
