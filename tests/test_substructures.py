@@ -4,6 +4,7 @@ and continuous."""
 
 import copy
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -210,3 +211,31 @@ def test_a_substructured_build_announces_itself_and_shows_its_substructures(caps
     assert "reducing this structure" in err and "450 Hz" in err and "vtb substructures" in err
     built.reduction(cfg, progress=True)  # built: nothing to say
     assert capsys.readouterr().err == ""
+
+
+def _build_digest(cutoff: float) -> str:
+    """A digest of every array of a fresh substructured build of the 3-span passage."""
+    import hashlib
+
+    from vtb.run import substructures as built
+
+    built._MEMORY.clear()
+    sub = built.reduction(passage(True, cutoff), progress=False).substructuring
+    h = hashlib.sha256()
+    for g in sub.groups:
+        for a in (g.omega2, g.phi, g.psi, g.residual):
+            h.update(np.ascontiguousarray(a).tobytes())
+    for a in (sub.m, sub.k):
+        h.update(a.data.tobytes())
+    return h.hexdigest()
+
+
+def test_substructured_builds_are_bit_identical_across_rebuilds_and_processes():
+    import subprocess
+    import sys
+
+    here = _build_digest(300.0)
+    assert _build_digest(300.0) == here
+    code = "import sys; sys.path.insert(0, 'tests'); import test_substructures as t; print(t._build_digest(300.0))"
+    other = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True, cwd=str(Path(__file__).resolve().parent.parent)).stdout.split()[-1]
+    assert other == here

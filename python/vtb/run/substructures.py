@@ -18,6 +18,8 @@ import sys
 import threading
 import time
 
+from threadpoolctl import threadpool_limits
+
 from ..analysis.eigen import assemble, core_substructures
 from ..analysis.substructures import Substructuring, reduce, residual_bands
 from ..config.fields import Config, structure_json
@@ -80,15 +82,19 @@ def reduction(config: Config, progress="auto") -> Built:
             bar.total = total
             bar.update(done - bar.n)
 
+        # One BLAS thread: OpenBLAS splits its sums by thread count, and a build must give the
+        # same bits in every process (as the synthesis' does, vtb.run.synthesis.build).
         try:
-            sub = reduce(system, float(fc), ratio=1.0, progress=note if bar is not None else None)
+            with threadpool_limits(limits=1):
+                sub = reduce(system, float(fc), ratio=1.0, progress=note if bar is not None else None)
+                if sub is not None:
+                    residual_bands(system, sub)
+                    c = sub.project(system.c)
         finally:
             if bar is not None:
                 bar.close()
         if sub is None:
             raise config_error("discretisation.substructure_cutoff", fc, "the structure cannot be cut into substructures (every layer must be finite elements)")
-        residual_bands(system, sub)
-        c = sub.project(system.c)
         built = Built(sub, core_substructures(sub, c), time.perf_counter() - t0)
         _MEMORY[key] = built
         return built
