@@ -74,40 +74,38 @@ pub(super) fn layers_and_couplings(cfg: &Config) -> Result<f64> {
 pub(super) fn discretisation(cfg: &Config) -> Result<()> {
     let s = &cfg.structure;
     let d = &cfg.discretisation;
-    if let Some(fc) = d.synthesis_cutoff {
-        let fc = positive("discretisation.synthesis_cutoff", fc)?;
+    for (field, cutoff, what) in [
+        (
+            "synthesis_cutoff",
+            d.synthesis_cutoff,
+            "the synthesis reduces",
+        ),
+        (
+            "substructure_cutoff",
+            d.substructure_cutoff,
+            "substructures reduce",
+        ),
+    ] {
+        let Some(fc) = cutoff else { continue };
+        let field = format!("discretisation.{field}");
+        let fc = positive(&field, fc)?;
         if d.method != Method::Fem {
             return Err(VtbError::config(
-                "discretisation.synthesis_cutoff",
+                field,
                 fc,
                 format!(
-                    "the synthesis reduces a finite-element structure (discretisation.method = \
-                     \"fem\", not {:?})",
+                    "{what} a finite-element structure (discretisation.method = \"fem\", not {:?})",
                     d.method
                 ),
             ));
         }
     }
-    if let Some(fc) = d.substructure_cutoff {
-        let fc = positive("discretisation.substructure_cutoff", fc)?;
-        if d.method != Method::Fem {
-            return Err(VtbError::config(
-                "discretisation.substructure_cutoff",
-                fc,
-                format!(
-                    "substructures reduce a finite-element structure (discretisation.method = \
-                     \"fem\", not {:?})",
-                    d.method
-                ),
-            ));
-        }
-        if d.synthesis_cutoff.is_some() {
-            return Err(VtbError::config(
-                "discretisation.substructure_cutoff",
-                fc,
-                "a structure runs on one engine: clear discretisation.synthesis_cutoff or this",
-            ));
-        }
+    if let (Some(_), Some(fc)) = (d.synthesis_cutoff, d.substructure_cutoff) {
+        return Err(VtbError::config(
+            "discretisation.substructure_cutoff",
+            fc,
+            "a structure runs on one engine: clear discretisation.synthesis_cutoff or this",
+        ));
     }
     if d.method == Method::Fem && !(2..=MAX_ELEMENTS).contains(&d.fem_elements) {
         return Err(VtbError::config(

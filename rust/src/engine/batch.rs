@@ -65,27 +65,22 @@ pub fn simulate_with(
 /// refused.
 fn engine<'r>(cfg: &Config, reduced: Option<Reduced<'r>>) -> Result<Option<Reduced<'r>>> {
     let d = &cfg.discretisation;
-    let asked = match (d.synthesis_cutoff, d.substructure_cutoff) {
-        (Some(fc), _) => Some((
+    match (reduced, d.synthesis_cutoff, d.substructure_cutoff) {
+        (None, None, None) => Ok(None),
+        (Some(r @ Reduced::Modes(_)), Some(_), _)
+        | (Some(r @ Reduced::Substructures(_)), None, Some(_)) => Ok(Some(r)),
+        (None, Some(fc), _) => Err(VtbError::config(
             "discretisation.synthesis_cutoff",
             fc,
             "the synthesis needs the structure's reduction (vtb.synthesis.reduction(config))",
         )),
-        (None, Some(fc)) => Some((
+        (None, None, Some(fc)) => Err(VtbError::config(
             "discretisation.substructure_cutoff",
             fc,
-            "the substructured engine needs the structure's substructures (vtb.run.substructures.reduction(config))",
+            "the substructured engine needs the structure's substructures \
+             (vtb.run.substructures.reduction(config))",
         )),
-        (None, None) => None,
-    };
-    match (asked, reduced) {
-        (None, None) => Ok(None),
-        (Some(("discretisation.synthesis_cutoff", ..)), Some(r @ Reduced::Modes(_)))
-        | (Some(("discretisation.substructure_cutoff", ..)), Some(r @ Reduced::Substructures(_))) => {
-            Ok(Some(r))
-        }
-        (Some((field, fc, why)), None) => Err(VtbError::config(field, fc, why)),
-        (_, Some(r)) => Err(VtbError::config(
+        (Some(r), ..) => Err(VtbError::config(
             match r {
                 Reduced::Modes(_) => "discretisation.synthesis_cutoff",
                 Reduced::Substructures(_) => "discretisation.substructure_cutoff",
