@@ -107,6 +107,26 @@ impl Substructured {
                 "rows, modes and bound need one entry per group",
             ));
         }
+        let groups = Self::groups(&p)?;
+        let pieces = Self::pieces(&p, &groups)?;
+        let rows = Self::rows(&p, &pieces)?;
+        let [m, c, k] = Self::matrices(&p)?;
+        let widest = pieces.iter().map(|p| p.hi + 1 - p.lo).max().unwrap_or(1);
+        Ok(Self {
+            rows,
+            pieces,
+            groups,
+            n,
+            m,
+            c,
+            k,
+            widest,
+            band: p.residual_band,
+        })
+    }
+
+    fn groups(p: &Parts) -> Result<Vec<Group>> {
+        let n_groups = p.group_rows.len();
         let (mut at_phi, mut at_psi, mut at_res) = (0, 0, 0);
         let bw = p.residual_band + 1;
         let mut groups = Vec::with_capacity(n_groups);
@@ -154,6 +174,11 @@ impl Substructured {
         if at_phi != p.phi.len() || at_psi != p.psi.len() || at_res != p.residual.len() {
             return Err(refuse("phi", p.phi.len(), "has entries beyond its groups'"));
         }
+        Ok(groups)
+    }
+
+    fn pieces(p: &Parts, groups: &[Group]) -> Result<Vec<Piece>> {
+        let (n, n_groups) = (p.n, groups.len());
         let n_pieces = p.piece_group.len();
         if p.piece_modes.len() != n_pieces || p.bound_ptr.len() != n_pieces + 1 {
             return Err(refuse(
@@ -205,6 +230,11 @@ impl Substructured {
                 hi,
             });
         }
+        Ok(pieces)
+    }
+
+    fn rows(p: &Parts, pieces: &[Piece]) -> Result<Vec<Row>> {
+        let (n, n_pieces) = (p.n, pieces.len());
         if p.dof_piece.len() != p.dof_index.len() {
             return Err(refuse(
                 "dof_index",
@@ -238,9 +268,13 @@ impl Substructured {
             };
             rows.push(row);
         }
-        let matrices = p.matrices.map(|(r, c, v)| (r, c, v));
+        Ok(rows)
+    }
+
+    fn matrices(p: &Parts) -> Result<[CsrMatrix; 3]> {
+        let n = p.n;
         let mut out = [(); 3].map(|_| CsrMatrix::zeros(0));
-        for (k, ((r, c, v), name)) in matrices.iter().zip(["m", "c", "k"]).enumerate() {
+        for (k, ((r, c, v), name)) in p.matrices.iter().zip(["m", "c", "k"]).enumerate() {
             if r.len() != v.len() || c.len() != v.len() {
                 return Err(refuse(
                     name,
@@ -261,19 +295,7 @@ impl Substructured {
             }
             out[k] = asm.finish();
         }
-        let widest = pieces.iter().map(|p| p.hi + 1 - p.lo).max().unwrap_or(1);
-        let [m, c, k] = out;
-        Ok(Self {
-            rows,
-            pieces,
-            groups,
-            n,
-            m,
-            c,
-            k,
-            widest,
-            band: p.residual_band,
-        })
+        Ok(out)
     }
 
     /// Layer DOFs this maps (the rows of T).
