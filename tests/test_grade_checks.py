@@ -3,6 +3,7 @@ against the grade"): each irregularity part against the band the model resolves 
 and the core's whole validation before a synthesis reduction is built. A build is replaced by
 one that fails the test, so a check that came after it would show."""
 
+import dataclasses
 import time
 import warnings
 
@@ -89,3 +90,41 @@ def test_the_cores_validation_refuses_before_a_reduction_is_built(no_build):
         with pytest.raises(vtb.ConfigError, match="output.band_limit"):
             vtb.simulate(c, progress=False)
     assert time.perf_counter() - t0 < 1.0
+
+
+def test_a_part_beyond_the_band_is_run_without_its_unresolved_wavelengths():
+    """The profile a run rolls on drops the out-of-band part's wavelengths below v/f_max and
+    keeps the rest of its draw: against an FFT low-pass of the unfiltered draw (the inverse-FFT
+    spectra), and a corrugation beyond the band left out."""
+    import numpy as np
+
+    c = passage()
+    with pytest.warns(vtb.ResolutionWarning, match=r"leaves those wavelengths out of irregularity.parts\[0\]") as w:
+        text, profile = vtb.config.prepare.prepare(c)
+    cut = c.speed / vtb.resolved_band(c).rail.f_max  # v/f_max, 0.556 m
+    assert "0.556 m" in str(w[0].message)
+    part = c.irregularity.parts[0]
+    lo, hi = profile.x0, profile.x0 + profile.dx * (profile.values.size - 1)
+    x0, dx, raw, _ = part.sample(lo, hi)
+    _, _, kept, _ = part.sample(lo, hi, shortest={"irregularity": cut})
+    spectrum = np.fft.rfft(raw)
+    spectrum[np.fft.rfftfreq(raw.size, dx) > 1.0 / cut] = 0.0
+    assert np.abs(kept - np.fft.irfft(spectrum, n=raw.size)).max() < 1e-9 * np.abs(raw).max()
+    # what was left out: the part's roughness below the cut, as its spectrum integrates it
+    gone = np.sqrt(vtb.config.irregularity.band_variance("tbt3352", 0.04, cut))
+    assert abs(np.std(raw - kept) - gone) < 0.03 * gone
+    # What the run rolls on: the irregularity with that part kept so (also when asked for alone).
+    a, b = vtb.config.prepare._rolled_extent(c, text)
+    _, _, whole, _ = c.irregularity.sample(a, b, shortest={"irregularity.parts[0]": cut})
+    assert np.array_equal(profile.values, whole)
+    vtb.config.prepare._profiles.clear()
+    assert np.array_equal(vtb.irregularity_profile(c).values, whole)
+    # A corrugation beyond the band: left out.
+    c = passage(short_wave=False)
+    c.irregularity.parts = [vtb.Irregularity(kind="corrugation", amplitude=2e-5, wavelength=0.06, start=0.0, end=160.0)]
+    with pytest.warns(vtb.ResolutionWarning):
+        text, profile = vtb.config.prepare.prepare(c)
+    base = dataclasses.replace(c.irregularity, parts=[])
+    x0, dx, values, _ = base.sample(*vtb.config.prepare._rolled_extent(c, text))
+    grid = profile.x0 + profile.dx * np.arange(profile.values.size)
+    assert np.array_equal(profile.values, np.interp(grid, x0 + dx * np.arange(values.size), values))

@@ -191,24 +191,31 @@ def band_variance(kind: str, wavelength_min: float, wavelength_max: float, **par
 # --------------------------------------------------------------------------------------------
 
 
-def generate_ifft(s: Callable[[np.ndarray], np.ndarray], n: int, dx: float, f_min: float, f_max: float, rng: np.random.Generator) -> np.ndarray:
+def generate_ifft(s: Callable[[np.ndarray], np.ndarray], n: int, dx: float, f_min: float, f_max: float, rng: np.random.Generator,
+                  f_keep: Optional[float] = None) -> np.ndarray:
     """n samples (spacing dx) with one-sided PSD s restricted to [f_min, f_max]: inverse FFT with
-    deterministic amplitudes N·sqrt(S·Δf/2) and uniform random phases."""
+    deterministic amplitudes N·sqrt(S·Δf/2) and uniform random phases; the components above
+    ``f_keep`` (cycles/m) left out of the same draw."""
     df = 1.0 / (n * dx)
     k = np.arange(n // 2 + 1)
     f = k * df
-    band = (f >= f_min) & (f <= f_max) & (k > 0) & (k < (n + 1) // 2)
+    top = f_max if f_keep is None else min(f_max, f_keep)
+    band = (f >= f_min) & (f <= top) & (k > 0) & (k < (n + 1) // 2)
     amp = np.zeros(n // 2 + 1)
     amp[band] = n * np.sqrt(s(f[band]) * df / 2.0)
     phase = rng.uniform(0.0, 2.0 * math.pi, n // 2 + 1)
     return np.fft.irfft(amp * np.exp(1j * phase), n=n)
 
 
-def generate_spectral(s: Callable[[np.ndarray], np.ndarray], x: np.ndarray, f_min: float, f_max: float, n_freq: int, rng: np.random.Generator) -> np.ndarray:
-    """Spectral representation Σ sqrt(2·S(f_k)·Δf)·cos(2πf_k·x + φ_k), jittered f_k."""
+def generate_spectral(s: Callable[[np.ndarray], np.ndarray], x: np.ndarray, f_min: float, f_max: float, n_freq: int, rng: np.random.Generator,
+                      f_keep: Optional[float] = None) -> np.ndarray:
+    """Spectral representation Σ sqrt(2·S(f_k)·Δf)·cos(2πf_k·x + φ_k), jittered f_k; the
+    components above ``f_keep`` (cycles/m) left out of the same draw."""
     df = (f_max - f_min) / n_freq
     fk = f_min + (np.arange(n_freq) + rng.uniform(0.0, 1.0, n_freq)) * df
     amp = np.sqrt(2.0 * s(fk) * df)
+    if f_keep is not None:
+        amp[fk > f_keep] = 0.0
     phase = rng.uniform(0.0, 2.0 * math.pi, n_freq)
     out = np.zeros_like(x)
     for i in range(0, n_freq, 256):  # bounded memory
@@ -522,7 +529,8 @@ class Irregularity(StrictFields):
         x0, dx, values, _ = rail.sample(x_min, x_max, memory_budget, [wheel_radius or 0.0])
         return x0, dx, values
 
-    def sample(self, x_min: float, x_max: float, memory_budget: Optional[float] = None, wheel_radii: Sequence[float] = ()) -> tuple[float, float, np.ndarray, list]:
+    def sample(self, x_min: float, x_max: float, memory_budget: Optional[float] = None, wheel_radii: Sequence[float] = (),
+               shortest: Optional[dict] = None) -> tuple[float, float, np.ndarray, list]:
         """Samples what the wheels roll on over [x_min, x_max]: returns (x0, dx, rail, treads),
         the rail's r(x) (m) and, when a part is a wheel flat, one tread row per wheel (m, an
         empty array for a round wheel; ``wheel_radii`` gives each wheel's radius, the first
@@ -532,23 +540,31 @@ class Irregularity(StrictFields):
         arrays would exceed ``memory_budget`` bytes (default: the core's
         ``solver.memory_budget``) raises :class:`~vtb.errors.ConfigError`; an inverse-FFT
         spectrum whose band the sampled length cannot realise (λ_max beyond it) warns with
-        the realised fraction of the band's variance (:class:`IrregularityWarning`)."""
-        parts = [q for q in (self, *self.parts) if q.kind != "none"]
-        rail = [q for q in parts if q.kind != "wheel_flat"]
+        the realised fraction of the band's variance (:class:`IrregularityWarning`).
+
+        ``shortest`` maps a stationary part's path (``"irregularity"``,
+        ``"irregularity.parts[i]"``) to the shortest wavelength (m) it keeps: a spectrum's
+        realisation without its components at shorter wavelengths (the same draws, so the rest
+        is unchanged), a corrugation of a shorter wavelength left out (what a run does with a
+        part beyond the band its model resolves, :func:`vtb.config.resolution.check_excitation`)."""
         named = [("irregularity", self)] + [(f"irregularity.parts[{i}]", q) for i, q in enumerate(self.parts)]
+        named = [(path, q) for path, q in named if q.kind != "none"]
+        rail = [(path, q) for path, q in named if q.kind != "wheel_flat"]
         flats = [(path, q) for path, q in named if q.kind == "wheel_flat"]
         radius = float(wheel_radii[0]) if len(wheel_radii) else 0.0
-        if not parts:
+        keep = shortest or {}
+        if not named:
             return 0.0, 1.0, np.zeros(0), []
         if len(rail) == 1 and not flats:
-            x0, dx, values = rail[0]._own(x_min, x_max, memory_budget, radius)
+            path, q = rail[0]
+            x0, dx, values = q._own(x_min, x_max, memory_budget, radius, keep.get(path))
             return x0, dx, values, []
-        dx = min(q.sample_spacing() for q in parts)
+        dx = min(q.sample_spacing() for _, q in named)
         n = _grid_size(x_min, x_max, dx, memory_budget, f"irregularity.dx")
         x = x_min + dx * np.arange(n)
         values = np.zeros(n)
-        for q in rail:
-            x0q, dxq, v = q._own(x_min, x_max, memory_budget, radius)
+        for path, q in rail:
+            x0q, dxq, v = q._own(x_min, x_max, memory_budget, radius, keep.get(path))
             values += np.interp(x, x0q + dxq * np.arange(v.size), v)
         treads = [np.zeros(0) for _ in wheel_radii] if flats else []
         for path, q in flats:
@@ -558,8 +574,10 @@ class Irregularity(StrictFields):
             treads[q.wheel] = row + q._flat(x, r) * q.scale
         return float(x_min), float(dx), values, treads
 
-    def _own(self, x_min: float, x_max: float, memory_budget: Optional[float], radius: float) -> tuple[float, float, np.ndarray]:
-        """This irregularity's rail profile alone (without its parts) on its own grid."""
+    def _own(self, x_min: float, x_max: float, memory_budget: Optional[float], radius: float,
+             shortest: Optional[float] = None) -> tuple[float, float, np.ndarray]:
+        """This irregularity's rail profile alone (without its parts) on its own grid; a
+        stationary part without its wavelengths below ``shortest`` (m, :meth:`sample`)."""
         if self.kind == "sampled":
             return float(self.x0), float(self.dx), np.asarray(self.values, dtype=float) * self.scale
         dx = self.sample_spacing()
@@ -569,16 +587,17 @@ class Irregularity(StrictFields):
             s = psd(self.kind, sato_a=self.sato_a)
             rng = np.random.default_rng(self.seed)
             f_min, f_max = 1.0 / self.wavelength_max, 1.0 / self.wavelength_min
+            f_keep = f_max if shortest is None else min(f_max, 1.0 / shortest)
             if self.method == "ifft":
                 self._check_realised_band(s, n, dx)
-                r = generate_ifft(s, n, dx, f_min, f_max, rng)
+                r = generate_ifft(s, n, dx, f_min, f_max, rng, f_keep)
             else:
-                r = generate_spectral(s, x - x_min, f_min, f_max, self.n_freq, rng)
+                r = generate_spectral(s, x - x_min, f_min, f_max, self.n_freq, rng, f_keep)
         elif self.kind == "cosine_dip":
             u = (x - self.position) / self.length
             r = np.where((u >= 0) & (u <= 1), 0.5 * self.depth * (1.0 - np.cos(2.0 * math.pi * u)), 0.0)
         elif self.kind == "corrugation":
-            inside = (x >= self.start) & (x <= self.end)
+            inside = (x >= self.start) & (x <= self.end) & (shortest is None or self.wavelength >= shortest)
             r = np.where(inside, 0.5 * self.amplitude * (1.0 - np.cos(2.0 * math.pi * (x - self.start) / self.wavelength)), 0.0)
         else:
             r = self._rail_defect(x, self.wheel_radius if self.wheel_radius is not None else radius)

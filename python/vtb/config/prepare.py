@@ -24,7 +24,7 @@ import numpy as np
 from . import gateway
 from .fields import Config, check_types, to_plain
 from .irregularity import Irregularity
-from .resolution import ResolutionWarning, check_excitation, real_or_none, resolved_band, warn_beyond
+from .resolution import ResolutionWarning, check_excitation, out_of_band, real_or_none, resolved_band, warn_beyond
 from ..errors import VtbError, config_error
 
 #: Extra length of generated irregularity beyond the structure at each end (m).
@@ -65,11 +65,11 @@ def prepare(cfg: Config, full: bool = False) -> tuple[str, SampledProfile]:
                               wheel_radii=[v.wheel_radius for v in vehicles for _ in range(v.n_wheels)],
                               extent=_rolled_extent(cfg, text))
     _warn_band_limit(cfg, text)
-    _check_excitation(cfg, text)
+    shortest = _check_excitation(cfg, text)
     # Every check that needs no profile (a run too long, a wheel crossing a rail end, the memory
     # budget) answers in microseconds: before the profile, which may take seconds to draw.
     gateway.validate(text, full=full)
-    return text, irregularity_profile(cfg, text)
+    return text, irregularity_profile(cfg, text, shortest)
 
 
 def _check_sections(cfg: Config) -> None:
@@ -124,15 +124,23 @@ def _warn_band_limit(cfg: Config, text: str) -> None:
         pass
 
 
-def _check_excitation(cfg: Config, text: str) -> None:
+def _check_excitation(cfg: Config, text: str) -> dict:
     """Each irregularity part against the band the model resolves for the rail
-    (:func:`vtb.config.resolution.check_excitation`); a configuration the core refuses is
-    left to the run, which names the field."""
+    (:func:`vtb.config.resolution.check_excitation`): what the run keeps of the parts beyond it.
+    A configuration the core refuses is left to the run, which names the field."""
     try:
         band = resolved_band(cfg, text)
     except (VtbError, AttributeError, TypeError):
-        return
-    check_excitation(cfg, band)
+        return {}
+    return check_excitation(cfg, band)
+
+
+def _shortest(cfg: Config, text: str) -> dict:
+    """The parts a run filters to its grade, silently (:func:`_check_excitation` warns)."""
+    try:
+        return {p.path: p.shortest for p in out_of_band(cfg, resolved_band(cfg, text))}
+    except (VtbError, AttributeError, TypeError):
+        return {}
 
 
 #: Bytes of generated profiles this process keeps (the least recently used go first).
@@ -147,10 +155,12 @@ def _nbytes(profile: SampledProfile) -> int:
     return profile.values.nbytes + sum(t.nbytes for t in profile.treads)
 
 
-def irregularity_profile(cfg: Config, text: Optional[str] = None) -> SampledProfile:
-    """The sampled irregularity a configuration runs on (arrays read-only). A structure length
-    the core will refuse gets no profile (the core then names the length). ``text``: the
-    configuration's core JSON when the caller has made it.
+def irregularity_profile(cfg: Config, text: Optional[str] = None, shortest: Optional[dict] = None) -> SampledProfile:
+    """The sampled irregularity a configuration runs on (arrays read-only): a stationary part
+    that excites the rail beyond the band the model resolves without its wavelengths beyond it
+    (:func:`vtb.config.resolution.check_excitation`; ``shortest`` as it returns, found here
+    when not given). A structure length the core will refuse gets no profile (the core then
+    names the length). ``text``: the configuration's core JSON when the caller has made it.
 
     A profile is a function of the irregularity, the stretch the wheels travel, the memory
     budget and the wheels' radii alone, and generating one costs tens of milliseconds: this
@@ -164,12 +174,15 @@ def irregularity_profile(cfg: Config, text: Optional[str] = None) -> SampledProf
     radii = [float(v.wheel_radius) for v in cfg.vehicles for _ in range(v.n_wheels)]
     # Wheels may start before the structure and end beyond it (on a rigid track).
     try:
-        travel = gateway.wheel_travel(cfg.to_core_json() if text is None else text)
+        text = cfg.to_core_json() if text is None else text
+        travel = gateway.wheel_travel(text)
     except (VtbError, ValueError, TypeError):  # refused later, naming the field
         travel = None
     lo, hi = (min(0.0, travel[0]), max(L, travel[1])) if travel else (0.0, L)
+    if shortest is None:
+        shortest = _shortest(cfg, text) if text is not None else {}
     spec = json.dumps(to_plain(cfg.irregularity), default=repr)  # a measured profile's values too
-    key = (hashlib.sha256(spec.encode()).hexdigest(), lo, hi, budget, tuple(radii))
+    key = (hashlib.sha256(spec.encode()).hexdigest(), lo, hi, budget, tuple(radii), tuple(sorted(shortest.items())))
     with _profiles_lock:
         hit = _profiles.get(key)
         if hit is not None:
@@ -177,7 +190,8 @@ def irregularity_profile(cfg: Config, text: Optional[str] = None) -> SampledProf
     if hit is None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            x0, dx, values, treads = cfg.irregularity.sample(lo - PROFILE_MARGIN, hi + PROFILE_MARGIN, memory_budget=budget, wheel_radii=radii)
+            x0, dx, values, treads = cfg.irregularity.sample(lo - PROFILE_MARGIN, hi + PROFILE_MARGIN, memory_budget=budget,
+                                                             wheel_radii=radii, shortest=shortest)
         if treads and not values.size:
             values = np.zeros(treads[0].size if treads[0].size else max(t.size for t in treads))
         for a in (values, *treads):

@@ -15,7 +15,7 @@ import json
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 
@@ -142,23 +142,33 @@ def warn_beyond(config: Config, layer: str, f_top: float, what: str, stepped: bo
 OUT_OF_BAND_RMS = 3e-6
 
 
-def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> None:
+class OutOfBand(NamedTuple):
+    """A stationary irregularity part that excites the rail beyond the band the model resolves
+    (:func:`out_of_band`): its path and field, its shortest wavelength and excitation v/λ_min
+    (m, Hz), the shortest wavelength the band takes, v/f_max (m), and the r.m.s. of its
+    roughness below it (m)."""
+
+    path: str
+    field: str
+    wavelength_min: float
+    excitation: float
+    shortest: float
+    rms: float
+
+
+def out_of_band(config: Config, band: Optional[ResolvedBand] = None) -> list:
     """Every stationary irregularity part (a spectrum or a corrugation; the irregularity itself
-    when it has no parts) against the band the model resolves for the rail (docs/resolution.md,
-    "The irregularity against the grade"), before any set-up. A part whose excitation v/λ_min
-    reaches beyond the rail's ``f_max`` and whose roughness at wavelengths shorter than
-    v/f_max has an r.m.s. above :data:`OUT_OF_BAND_RMS` gives a :class:`ResolutionWarning`
-    naming the part, its band and what would take it: the grade (synthesis cut-off and time
-    step, or time step) that resolves v/λ_min, or the wavelength_min this grade takes."""
+    when it has no parts) whose excitation v/λ_min reaches beyond the rail's ``f_max`` and whose
+    roughness at wavelengths shorter than v/f_max has an r.m.s. above :data:`OUT_OF_BAND_RMS`
+    (docs/resolution.md, "The irregularity against the grade"), as :class:`OutOfBand`."""
     v = real_or_none(getattr(config, "speed", None))
     irr = getattr(config, "irregularity", None)
     if v is None or v <= 0 or irr is None:
-        return
+        return []
     band = band or resolved_band(config)
-    rail = band.rail
-    f_rail = rail.f_max
-    cut = v / f_rail  # the shortest wavelength the rail's band takes at this speed (m)
+    cut = v / band.rail.f_max  # the shortest wavelength the rail's band takes at this speed (m)
     parts = [(f"irregularity.parts[{i}]", q) for i, q in enumerate(irr.parts)] or [("irregularity", irr)]
+    found = []
     for path, q in parts:
         if q.kind in SPECTRA:
             lam_min, lam_max = float(q.wavelength_min), float(q.wavelength_max)
@@ -173,9 +183,27 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> Non
             rms = abs(q.scale * q.amplitude) / math.sqrt(2.0)
         else:
             continue
-        if rms <= OUT_OF_BAND_RMS:
-            continue
-        f_exc = v / lam_min
+        if rms > OUT_OF_BAND_RMS:
+            found.append(OutOfBand(path, field, lam_min, v / lam_min, cut, rms))
+    return found
+
+
+def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> dict:
+    """Each part :func:`out_of_band` finds gives a :class:`ResolutionWarning` naming the part,
+    its band and what would take it (the grade — synthesis or substructure cut-off and time
+    step, or time step — that resolves v/λ_min, or the wavelength_min this grade takes), and is
+    run filtered to the grade: without its wavelengths below v/f_max (a spectrum's shorter
+    components left out of the same draw, a corrugation left out), so that no contact force or
+    loss of contact comes from excitation the model cannot carry. Returns what the run keeps of
+    each such part: its path → the shortest wavelength (m), as
+    :meth:`vtb.Irregularity.sample` takes it."""
+    band = band or resolved_band(config)
+    rail = band.rail
+    f_rail = rail.f_max
+    keep = {}
+    for part in out_of_band(config, band):
+        keep[part.path] = part.shortest
+        f_exc = part.excitation
         dt = real_or_none(getattr(config.solver, "dt", None))
         dt_need = dt * rail.time_f_max / f_exc if dt else None
         if config.discretisation.synthesis_cutoff is not None:
@@ -186,13 +214,15 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> Non
             grade = "a rail basis that resolves it"
         step = f" with solver.dt ≤ {dt_need:.2g} s" if dt_need is not None and f_exc > rail.time_f_max else ""
         warnings.warn(
-            f"{field} = {lam_min:g} m excites the rail up to v/λ = {f_exc:.0f} Hz, beyond the {f_rail:.0f} Hz this "
-            f"model resolves for the rail (limited by its {rail.limited_by}; vtb.resolved_band(config)); its roughness "
-            f"at wavelengths below v/{f_rail:.0f} Hz = {cut:.3g} m has an r.m.s. of {rms * 1e6:.3g} μm (above "
-            f"{OUT_OF_BAND_RMS * 1e6:g} μm): contact forces and losses of contact from it are artefacts of the model. "
-            f"Take it on a grade that resolves {f_exc:.0f} Hz ({grade}{step}), or raise {field} to {cut:.3g} m on this one",
+            f"{part.field} = {part.wavelength_min:g} m excites the rail up to v/λ = {f_exc:.0f} Hz, beyond the {f_rail:.0f} Hz "
+            f"this model resolves for the rail (limited by its {rail.limited_by}; vtb.resolved_band(config)); its roughness "
+            f"at wavelengths below v/{f_rail:.0f} Hz = {part.shortest:.3g} m has an r.m.s. of {part.rms * 1e6:.3g} μm (above "
+            f"{OUT_OF_BAND_RMS * 1e6:g} μm): the run leaves those wavelengths out of {part.path} (contact forces and losses "
+            f"of contact from them would be artefacts of the model). Take it on a grade that resolves {f_exc:.0f} Hz "
+            f"({grade}{step}), or set {part.field} to {part.shortest:.3g} m on this one",
             ResolutionWarning,
             stacklevel=5,
         )
+    return keep
 
 
