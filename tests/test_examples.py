@@ -79,8 +79,9 @@ def test_the_fast_examples_are_the_fast_preset_and_a_passage_on_it():
 
 def test_the_long_passage_runs_on_the_substructured_engine_at_the_deck_grade():
     p = vtb.example_config("passage_long")
-    assert p.discretisation.substructure_cutoff == 600.0 and p.discretisation.synthesis_cutoff is None
-    assert p.structure.length == 840.0 and len(p.vehicles) == 8 and p.solver.dt == 2e-4
+    deck = vtb.paper_config(model="deck")
+    assert p.discretisation.substructure_cutoff == deck.discretisation.substructure_cutoff and p.discretisation.synthesis_cutoff is None
+    assert p.structure.length == 840.0 and len(p.vehicles) == 8 and p.solver.dt == deck.solver.dt
     assert vtb.resolved_band(p).rail.f_max >= p.output.band_limit
 
 

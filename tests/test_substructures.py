@@ -17,7 +17,7 @@ from vtb.analysis.eigen import assemble, sliced_eigsh
 FMAX = 60.0
 
 #: The deck grade's cut-off (vtb.paper_config(model="deck")).
-DECK = 600.0
+DECK = 1200.0
 
 
 def viaduct(n_spans: int, simply_supported: bool = True, approach: float = 30.0) -> vtb.Config:
@@ -118,10 +118,39 @@ def passage(simply_supported: bool, cutoff=None) -> vtb.Config:
     return cfg
 
 
+def test_the_residual_moments_are_the_truncated_modes_receptance_about_zero():
+    """R₀ + sR₁ + s²R₂ (residual_bands) against the interior's receptance solved directly,
+    (K_II + sC_II + s²M_II)⁻¹ less the kept modes' Φ(Λ + sD + s²I)⁻¹Φᵀ, at a rail row (cut-off 300 Hz): the
+    error falls as s³ (the next moment), so halving the frequency cuts it about eightfold."""
+    system = assemble(passage(True))
+    sub = substructures.reduce(system, 300.0, ratio=1.0)
+    substructures.residual_bands(system, sub)
+    piece = next(p for p in sub.pieces if p.inner.size and sub.groups[p.group].phi.shape[1] > 5)
+    g = sub.groups[piece.group]
+    k, m, c = (a.tocsr()[piece.inner][:, piece.inner].toarray() for a in (system.k, system.m, system.c))
+    _, first, count = system.layers[0]
+    rail = np.flatnonzero((piece.inner >= first) & (piece.inner < first + count))
+    r = rail[rail.size // 2]
+    d = g.phi.T @ c @ g.phi
+
+    def error(f, terms=3):
+        s = 2j * math.pi * f
+        exact = np.linalg.solve(k + s * c + s * s * m, np.eye(k.shape[0])[:, r])
+        exact -= g.phi @ np.linalg.solve(np.diag(g.omega2) + s * d + s * s * np.eye(d.shape[0]), g.phi[r])
+        series = sum(s ** j * g.residual[j, r, 0] for j in range(terms))
+        return abs(exact[r] - series) / abs(exact[r])
+
+    assert g.residual[0, r, 0] > 0 and g.residual[1, r, 0] < 0
+    e = [error(f) for f in (50.0, 25.0, 12.5)]
+    assert e[0] < 2e-3 and e[1] / e[2] > 6.0, e
+    # the static residual alone is 0.5 % off at 12.5 Hz already (the truncated modes' damping)
+    assert error(12.5, terms=1) > 100 * e[2]
+
+
 @pytest.fixture(scope="module", params=[True, False], ids=["simply-supported", "continuous"])
 def runs(request):
     fem = vtb.simulate(passage(request.param), progress=False).metrics()
-    return fem, {fc: vtb.simulate(passage(request.param, fc), progress=False).metrics() for fc in (300.0, DECK, 1200.0)}
+    return fem, {fc: vtb.simulate(passage(request.param, fc), progress=False).metrics() for fc in (600.0, DECK)}
 
 
 def rel(a, b):
@@ -130,26 +159,40 @@ def rel(a, b):
 
 def test_the_deck_grade_gives_the_finite_elements_deck_within_1_and_2_percent(runs):
     fem, sub = runs
-    for fc in (DECK, 1200.0):
+    for fc in (600.0, DECK):
         assert rel(fem["deck_disp_max"], sub[fc]["deck_disp_max"]) < 0.01
         assert rel(fem["deck_moment_max"], sub[fc]["deck_moment_max"]) < 0.01
         assert rel(fem["deck_acc_max"], sub[fc]["deck_acc_max"]) < 0.02
         assert rel(fem["car_comfort_aw"], sub[fc]["car_comfort_aw"]) < 0.01
 
 
-def test_the_contact_forces_converge_to_the_finite_elements(runs):
-    fem, sub = runs
+@pytest.fixture(scope="module")
+def converged_contact():
+    """The simply supported passage's contact forces on the finite elements at Δt = 5e-5 and
+    2.5e-5 s (the reference: converged in the time step) and at the deck grade."""
+    out = {}
+    for dt in (5e-5, 2.5e-5):
+        c = passage(True)
+        c.solver.dt = dt
+        out[dt] = vtb.simulate(c, progress=False).metrics()
+    c = passage(True, DECK)
+    c.solver.dt = vtb.paper_config(model="deck").solver.dt
+    out["deck"] = vtb.simulate(c, progress=False).metrics()
+    return out
+
+
+def test_the_deck_grades_contact_force_extremes_are_within_1_percent_of_the_converged_finite_elements(converged_contact):
+    fem, fine, deck = converged_contact[5e-5], converged_contact[2.5e-5], converged_contact["deck"]
     for name in ("contact_force_max", "contact_force_min"):
-        errors = [rel(fem[name], sub[fc][name]) for fc in (300.0, DECK, 1200.0)]
-        assert errors[1] < 0.04 and errors[2] < 0.01, (name, errors)
-        assert errors[2] < errors[0] or errors[0] < 0.01, (name, errors)
+        assert rel(fine[name], fem[name]) < 0.005, (name, fem[name], fine[name])  # the reference has converged
+        assert rel(fine[name], deck[name]) < 0.01, (name, fine[name], deck[name])
 
 
 def test_the_deck_grade_preset_is_the_converged_structure_on_substructures():
     deck, conv = vtb.paper_config(model="deck"), vtb.paper_config(model="converged")
     assert deck.discretisation.substructure_cutoff == DECK and deck.discretisation.synthesis_cutoff is None
     assert deck.structure == conv.structure and deck.vehicles == conv.vehicles
-    assert deck.solver.dt == 2e-4 and deck.output.band_limit == 150.0
+    assert deck.solver.dt == 1e-4 and deck.output.band_limit == 150.0
     band = vtb.resolved_band(deck).rail
     assert band.basis_f_max == pytest.approx(DECK / 2) and band.f_max >= deck.output.band_limit
     assert deck.irregularity.wavelength_min * deck.output.band_limit >= deck.speed

@@ -259,5 +259,5 @@ def core_substructures(sub, c: sp.spmatrix):
         [g.phi.shape[0] for g in sub.groups], [g.phi.shape[1] for g in sub.groups], [g.psi.shape[1] for g in sub.groups],
         flat([g.phi for g in sub.groups]), flat([g.psi for g in sub.groups]),
         int(sub.reduced_dofs), (triplets(sub.m), triplets(c), triplets(sub.k)),
-        flat([g.residual if g.residual is not None else np.zeros((g.phi.shape[0], 1)) for g in sub.groups]),
-        max((g.residual.shape[1] - 1 for g in sub.groups if g.residual is not None), default=0))
+        flat([g.residual if g.residual is not None else np.zeros((3, g.phi.shape[0], 1)) for g in sub.groups]),
+        max((g.residual.shape[-1] - 1 for g in sub.groups if g.residual is not None), default=0))

@@ -74,8 +74,8 @@ class Group:
     omega2: np.ndarray
     phi: np.ndarray
     psi: np.ndarray
-    #: R = K_II⁻¹ − ΦΛ⁻¹Φᵀ between rows r and r + d, 0 ≤ d ≤ band, at ``[r, d]`` (m/N): the
-    #: static flexibility the truncated interior modes hold (:func:`residual_bands`; rows of
+    #: The truncated interior modes' receptance moments R₀ (m/N), R₁ (m·s/N), R₂ (m·s²/N)
+    #: between rows r and r + d, 0 ≤ d ≤ band, at ``[k, r, d]`` (:func:`residual_bands`; rows of
     #: the top layer only, zero elsewhere).
     residual: Optional[np.ndarray] = None
 
@@ -291,8 +291,8 @@ def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SU
     # any matrix entry across one (an element of a layer with no node on the cut), are the
     # interface; each interface DOF belongs to its nearest cut.
     side = np.searchsorted(cut_keys, key)
-    m, k = system.m.tocsr(), system.k.tocsr()
-    pattern = (abs(m) + abs(k) + abs(system.c.tocsr())).tocoo()
+    m, k, c = system.m.tocsr(), system.k.tocsr(), system.c.tocsr()
+    pattern = (abs(m) + abs(k) + abs(c)).tocoo()
     owner = np.where(on_cut, -1, side)
     across = (owner[pattern.row] >= 0) & (owner[pattern.col] >= 0) & (owner[pattern.row] != owner[pattern.col])
     owner[pattern.row[across]] = -1
@@ -326,7 +326,8 @@ def reduce(system: System, fmax: float, ratio: float = RATIO, length: float = SU
         kii, mii = k[inner][:, inner].tocsc(), m[inner][:, inner].tocsc()
         kib, mib = k[inner][:, bound], m[inner][:, bound]
         x0 = key[inner[0]]
-        fp = _fingerprint(kii, mii, kib, mib, key[inner] - x0, key[bound] - x0, layer_of[inner], layer_of[bound])
+        # C_II too: a group's residual filter (residual_bands) is computed on its first piece.
+        fp = _fingerprint(kii, mii, c[inner][:, inner], kib, mib, key[inner] - x0, key[bound] - x0, layer_of[inner], layer_of[bound])
         if fp not in found:
             omega2, phi = _interior_modes(kii, mii, hi)
             psi = -np.asarray(spd_solver(kii).solve(kib.toarray())) if bound.size else np.zeros((inner.size, 0))
@@ -359,11 +360,16 @@ RESIDUAL_ROWS = 16
 
 
 def residual_bands(system: System, sub: Substructuring, band: int = RESIDUAL_ROWS) -> None:
-    """Fills each group's ``residual``: the static flexibility of its truncated fixed-interface
-    modes between the top layer's (the rail's) interior DOFs within ``band`` rows, so that a
-    wheel sees the rail's whole static flexibility (constraint modes and kept modes hold the
-    rest exactly). Computed on the first piece of each group."""
-    k = system.k.tocsr()
+    """Fills each group's ``residual``: the moments R₀, R₁, R₂ of its truncated fixed-interface
+    modes' receptance between the top layer's (the rail's) interior DOFs within ``band`` rows.
+    The interior's receptance (K + sC + s²M)⁻¹ about s = 0 has the moments F₀ = K⁻¹,
+    F₁ = −K⁻¹CK⁻¹, F₂ = K⁻¹CK⁻¹CK⁻¹ − K⁻¹MK⁻¹; the kept modes' (Λ + sD + s²I, D = ΦᵀCΦ) hold
+    ΦΛ⁻¹Φᵀ, −ΦΛ⁻¹DΛ⁻¹Φᵀ and Φ(Λ⁻¹DΛ⁻¹DΛ⁻¹ − Λ⁻²)Φᵀ; R_k is the difference. R₀ makes a wheel
+    see the rail's whole static flexibility (constraint modes and kept modes hold the rest
+    exactly); R₁ and R₂ give the core the filter that carries the truncated modes' damping and
+    inertia (docs/substructures.md, "The wheel's residual"). Computed on the first piece of each
+    group (its members share K, M and C)."""
+    k, m, c = system.k.tocsr(), system.m.tocsr(), system.c.tocsr()
     _, first, count = system.layers[0]
     done = set()
     for p in sub.pieces:
@@ -372,22 +378,31 @@ def residual_bands(system: System, sub: Substructuring, band: int = RESIDUAL_ROW
         done.add(p.group)
         g = sub.groups[p.group]
         rows = np.flatnonzero((p.inner >= first) & (p.inner < first + count))
-        kii = k[p.inner][:, p.inner]
+        kii, mii, cii = (a[p.inner][:, p.inner] for a in (k, m, c))
         e = np.zeros((p.inner.size, rows.size))
         e[rows, np.arange(rows.size)] = 1.0
-        x = np.asarray(spd_solver(kii).solve(e))
-        x -= g.phi @ ((g.phi[rows].T) / g.omega2[:, None])
-        out = np.zeros((p.inner.size, band + 1))
-        for j, r in enumerate(rows):
-            hi = min(p.inner.size, r + band + 1)
-            out[r, :hi - r] = x[r:hi, j]
-        # keep only pairs of rail rows (symmetric: R[r, r + d] from the column of r)
+        solver = spd_solver(kii)
+        x0 = np.asarray(solver.solve(e))
+        x1 = np.asarray(solver.solve(cii @ x0))
+        x2 = np.asarray(solver.solve(cii @ x1 - mii @ x0))
+        inv = 1.0 / g.omega2
+        d = g.phi.T @ (cii @ g.phi)
+        y0 = inv[:, None] * g.phi[rows].T  # Λ⁻¹Φᵀe
+        y1 = inv[:, None] * (d @ y0)  # Λ⁻¹DΛ⁻¹Φᵀe
+        y2 = inv[:, None] * (d @ y1) - inv[:, None] * y0  # (Λ⁻¹DΛ⁻¹DΛ⁻¹ − Λ⁻²)Φᵀe
+        full = (x0 - g.phi @ y0, -(x1 - g.phi @ y1), x2 - g.phi @ y2)
+        out = np.zeros((3, p.inner.size, band + 1))
         rail = np.zeros(p.inner.size, bool)
         rail[rows] = True
-        for d in range(band + 1):
-            partner = np.arange(p.inner.size) + d
-            ok = partner < p.inner.size
-            out[~rail, d] = 0.0
-            out[ok & rail, d] *= rail[partner[ok & rail]]
-            out[~ok, d] = 0.0
+        for o, x in zip(out, full):
+            for j, r in enumerate(rows):
+                hi = min(p.inner.size, r + band + 1)
+                o[r, :hi - r] = x[r:hi, j]
+            # keep only pairs of rail rows (symmetric: R[r, r + d] from the column of r)
+            for dd in range(band + 1):
+                partner = np.arange(p.inner.size) + dd
+                ok = partner < p.inner.size
+                o[~rail, dd] = 0.0
+                o[ok & rail, dd] *= rail[partner[ok & rail]]
+                o[~ok, dd] = 0.0
         g.residual = out

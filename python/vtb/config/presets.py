@@ -76,7 +76,7 @@ def paper_config(seed: int = PAPER_SEED, calibrated: bool = False, model: str = 
 
     ``model="deck"``: the **deck grade** — the converged structure and car on the substructured
     engine (:mod:`vtb.run.substructures`, docs/substructures.md): each substructure's
-    fixed-interface modes below 600 Hz and the DOFs on the cuts, Newmark at Δt = 2e-4 s, the
+    fixed-interface modes below 1 200 Hz and the DOFs on the cuts, Newmark at Δt = 1e-4 s, the
     acceleration indices band-limited at 150 Hz, under the long-wave German spectrum
     (:data:`DECK_IRREGULARITY`, 1–20 m; ``calibrated`` does not apply). Deck, ride comfort
     and contact force, for long viaducts and trains (re-span it with :func:`vtb.spans` and

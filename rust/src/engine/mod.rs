@@ -3,7 +3,7 @@
 //! - `batch`: the entrance — one run or many jobs, grouped by model into lockstep lanes and
 //!   dispatched to the engine a configuration asks for;
 //! - `coupled`: what every engine shares — the vehicles, their contact with the rail, the
-//!   moving forces, the records;
+//!   moving forces, the records, the residual filter of truncated modes under a wheel;
 //! - `integrator`: the Newmark stepper of a linear subsystem with contact ports (the cars' and
 //!   the finite-element / modal structure's);
 //! - `newmark`: the structure stepped by Newmark (modal, hybrid FE–SEA or finite elements);
@@ -19,6 +19,7 @@ pub use batch::{
     BatchOptions, Reduced, Sink, model_key, run_batch, run_batch_each, run_batch_with, simulate,
     simulate_with,
 };
+pub use coupled::residual::{Filter, FilterStep};
 
 use crate::config::DamperParams;
 use crate::config::{Config, Profile};

@@ -442,7 +442,7 @@ impl Structure {
     /// `local_flexibility` of the rail under a wheel, averaged over its patch (m/N), times
     /// the square of the rail's share of the force (`edge_share`): the wheel carries s·P to
     /// the rail and sees s times its deflection.
-    pub fn wheel_flexibility(&self, x: f64, patch: f64) -> f64 {
+    pub fn element_flexibility(&self, x: f64, patch: f64) -> f64 {
         let l = &self.layers[0];
         let (a, b) = l.extent();
         let x = on_interval(x, a, b).unwrap_or(x);
@@ -451,14 +451,31 @@ impl Structure {
             LayerBasis::Fem(mesh) if patch > 0.0 => mesh.patch_flexibility(l.ei, x, patch),
             _ => self.local_flexibility(0, x),
         };
-        // Substructured: also what the interior's truncated modes held statically.
-        let truncated = self.reduced.as_ref().map_or(0.0, |sub| {
-            LAYER_SHAPE.with_borrow_mut(|shape| {
-                self.wheel_shape_on_rail(x, patch, shape);
-                sub.residual(shape.start, &shape.values)
-            })
+        s * s * element
+    }
+
+    /// Substructured: the moments r₀, r₁, r₂ (m/N, m·s/N, m·s²/N) of the receptance the
+    /// interiors' truncated modes hold under a wheel, times the square of the rail's share
+    /// (`element_flexibility`); zero otherwise. r₀ is their static flexibility; r₁ and r₂ give
+    /// the wheel's residual filter (`engine::coupled::residual`).
+    pub fn wheel_residual(&self, x: f64, patch: f64) -> [f64; 3] {
+        let Some(sub) = &self.reduced else {
+            return [0.0; 3];
+        };
+        let (a, b) = self.layers[0].extent();
+        let x = on_interval(x, a, b).unwrap_or(x);
+        let s = self.edge_share(x);
+        let r = LAYER_SHAPE.with_borrow_mut(|shape| {
+            self.wheel_shape_on_rail(x, patch, shape);
+            sub.residual_moments(shape.start, &shape.values)
         });
-        s * s * (element + truncated)
+        r.map(|r| s * s * r)
+    }
+
+    /// The rail's static flexibility under a wheel beyond the structure's DOFs: the element's
+    /// (`element_flexibility`) and, substructured, what the truncated modes hold.
+    pub fn wheel_flexibility(&self, x: f64, patch: f64) -> f64 {
+        self.element_flexibility(x, patch) + self.wheel_residual(x, patch)[0]
     }
 
     /// Entries a wheel's shape vector may need (`wheel_shape_into`).

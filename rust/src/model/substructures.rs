@@ -42,7 +42,8 @@ struct Group {
     n_bound: usize,
     phi: Vec<f64>,
     psi: Vec<f64>,
-    /// R between rows r and r + d at `[r·(band + 1) + d]` (m/N).
+    /// The truncated modes' receptance moments R₀ (m/N), R₁ (m·s/N), R₂ (m·s²/N) between rows
+    /// r and r + d at `[(k·rows + r)·(band + 1) + d]`.
     residual: Vec<f64>,
 }
 
@@ -89,8 +90,9 @@ pub struct Parts {
     /// Reduced DOFs, and M, C, K as COO triplets (both triangles; duplicates summed).
     pub n: usize,
     pub matrices: [(Vec<usize>, Vec<usize>, Vec<f64>); 3],
-    /// Per group, rows × (`residual_band` + 1): the static flexibility its truncated modes
-    /// hold between rows r and r + d (m/N), one group after another.
+    /// Per group, 3 × rows × (`residual_band` + 1): the moments R₀, R₁, R₂ of its truncated
+    /// modes' receptance between rows r and r + d (m/N, m·s/N, m·s²/N; R₀ the static
+    /// flexibility they hold), one group after another.
     pub residual: Vec<f64>,
     pub residual_band: usize,
 }
@@ -140,16 +142,17 @@ impl Substructured {
                     "Φ or Ψ is shorter than its rows × columns",
                 ));
             }
-            if at_res + r * bw > p.residual.len() {
+            let lr = 3 * r * bw;
+            if at_res + lr > p.residual.len() {
                 return Err(refuse(
                     &format!("groups[{g}].residual"),
                     p.residual.len(),
-                    "is shorter than its rows × band",
+                    "is shorter than its 3 moments × rows × band",
                 ));
             }
             let phi = p.phi[at_phi..at_phi + lp].to_vec();
             let psi = p.psi[at_psi..at_psi + ls].to_vec();
-            let residual = p.residual[at_res..at_res + r * bw].to_vec();
+            let residual = p.residual[at_res..at_res + lr].to_vec();
             if let Some(i) = phi
                 .iter()
                 .chain(&psi)
@@ -162,7 +165,7 @@ impl Substructured {
                     "holds a non-finite value",
                 ));
             }
-            (at_phi, at_psi, at_res) = (at_phi + lp, at_psi + ls, at_res + r * bw);
+            (at_phi, at_psi, at_res) = (at_phi + lp, at_psi + ls, at_res + lr);
             groups.push(Group {
                 n_modes: m,
                 n_bound: b,
@@ -303,11 +306,12 @@ impl Substructured {
         self.rows.len()
     }
 
-    /// sᵀ·R·s for a layer shape s: the static flexibility under the load s that the truncated
-    /// interior modes hold (zero on the cuts, between pieces and beyond the stored band).
-    pub fn residual(&self, start: usize, values: &[f64]) -> f64 {
+    /// sᵀ·R_k·s for a layer shape s, k = 0, 1, 2: the moments of the truncated interior modes'
+    /// receptance under the load s (zero on the cuts, between pieces and beyond the stored
+    /// band); sᵀR₀s is the static flexibility they hold.
+    pub fn residual_moments(&self, start: usize, values: &[f64]) -> [f64; 3] {
         let bw = self.band + 1;
-        let mut sum = 0.0;
+        let mut sum = [0.0; 3];
         for (a, &va) in values.iter().enumerate() {
             let Row::Interior { piece: pa, row: ra } = self.rows[start + a] else {
                 continue;
@@ -319,7 +323,10 @@ impl Substructured {
                 let (lo, hi) = (ra.min(rb) as usize, ra.max(rb) as usize);
                 if pa == pb && hi - lo <= self.band {
                     let g = &self.groups[self.pieces[pa as usize].group];
-                    sum += va * vb * g.residual[lo * bw + hi - lo];
+                    let block = g.residual.len() / 3;
+                    for (k, s) in sum.iter_mut().enumerate() {
+                        *s += va * vb * g.residual[k * block + lo * bw + hi - lo];
+                    }
                 }
             }
         }
@@ -403,8 +410,11 @@ mod tests {
             psi: vec![0.75, 0.125],
             n: 3,
             matrices: [eye(3), eye(3), eye(3)],
-            // R between rows 0 and 0, 0 and 1, 1 and 1: 3, 1, 2 (band 1)
-            residual: vec![3.0, 1.0, 2.0, 0.0],
+            // R₀ between rows 0 and 0, 0 and 1, 1 and 1: 3, 1, 2 (band 1); R₁ = −R₀/10;
+            // R₂ = R₀/100.
+            residual: vec![
+                3.0, 1.0, 2.0, 0.0, -0.3, -0.1, -0.2, 0.0, 0.03, 0.01, 0.02, 0.0,
+            ],
             residual_band: 1,
         })
         .unwrap()
@@ -431,10 +441,13 @@ mod tests {
     #[test]
     fn the_residual_is_the_quadratic_form_of_rows_of_one_piece() {
         let s = two_pieces();
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-12);
         // [1, 2] on piece 0's rows 0, 1: 3 + 2·2·1 + 4·2 = 15; the cut adds nothing.
-        assert_eq!(s.residual(0, &[1.0, 2.0, 5.0]), 15.0);
+        let r = s.residual_moments(0, &[1.0, 2.0, 5.0]);
+        assert!(close(r, [15.0, -1.5, 0.15]), "{r:?}");
         // rows of two pieces do not couple: piece 0 row 1 and piece 1 row 0 → 2 + 3
-        assert_eq!(s.residual(1, &[1.0, 0.0, 1.0]), 5.0);
+        let r = s.residual_moments(1, &[1.0, 0.0, 1.0]);
+        assert!(close(r, [5.0, -0.5, 0.05]), "{r:?}");
     }
 
     #[test]
@@ -457,7 +470,7 @@ mod tests {
                 (vec![], vec![], vec![]),
                 (vec![1], vec![1], vec![1.0]),
             ],
-            residual: vec![0.5],
+            residual: vec![0.5, -0.05, 0.005],
             residual_band: 0,
         };
         assert!(Substructured::new(good()).is_ok());

@@ -110,7 +110,7 @@ impl Reduction {
         let at = || format!("a load at rail DOF {start}");
         self.0
             .load_moments(&s, at)
-            .and_then(|r| vtb::engine::synthesis::Filter::from_moments(r, at))
+            .and_then(|r| vtb::engine::Filter::from_moments(r, at))
             .map(|f| f.map(|f| (f.alpha, f.beta)))
             .map_err(|e| to_py_err(py, e))
     }

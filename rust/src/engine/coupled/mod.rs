@@ -10,6 +10,7 @@
 //! through the rail's free displacement and compliance at the wheels (a wheel's port), as in
 //! STEM's vehicle interface, so a new engine is a new structure side.
 
+pub(crate) mod residual;
 mod vehicles;
 
 pub(crate) use vehicles::{Mover, Vehicles};

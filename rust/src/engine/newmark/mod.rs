@@ -10,6 +10,7 @@
 mod correction;
 mod step;
 
+use super::coupled::residual::WheelFilters;
 use super::coupled::{self, Mover, Vehicles};
 use super::integrator::{Newmark, Numbering, PortBlock, SVec, accelerations};
 use super::{Control, LaneSpec};
@@ -45,6 +46,9 @@ pub(super) struct NewmarkSide<'m, const W: usize> {
     correction: Option<RailCorrection<'m>>,
     /// The rail's free displacement at every wheel this step, `[lane·nw + wheel]`.
     rail_free: Vec<f64>,
+    /// Substructured: each wheel's filter of the residual the interiors' truncated modes hold
+    /// (their static flexibility, damping and inertia, in series with the contact).
+    residual: Option<WheelFilters<W>>,
     /// The end of the step under way (s).
     t1: f64,
     /// Observers of the layers' records (the first ones), then of each pad's two ends, then
@@ -228,6 +232,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             },
             scratch: Default::default(),
             rail_free: Vec::new(),
+            residual: None,
             t1: 0.0,
             n_layer_obs,
             pads,
@@ -260,6 +265,7 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             rc.sines = vec![0.0; (nw + rc.movers.len()) * rc.fs.modes.len()];
         }
         self.rail_free = vec![0.0; W * nw];
+        self.residual = st.reduced.as_ref().map(|_| WheelFilters::new(nw));
         self
     }
 
@@ -364,20 +370,32 @@ impl<'m, const W: usize> NewmarkSide<'m, W> {
             }
         };
         self.track.set_state(j, &u0, &vec![0.0; n], &a0, k_l, m_l);
-        // Substructured: the wheel also stands on the static flexibility in series with its
-        // contact (the truncated interior modes' share is not small), so that it starts at rest.
-        let series = st.reduced.is_some() && self.element_flexibility;
-        Ok((0..v.n_wheels())
+        // Substructured: the wheel also stands on its static flexibility in series with its
+        // contact (the truncated interior modes' share is not small), so that it starts at
+        // rest, and the residual filters hold the loads.
+        let held: Vec<f64> = match cfg.solver.initial_state {
+            InitialState::Static => v.loads.clone(),
+            InitialState::Rest => vec![0.0; v.n_wheels()],
+        };
+        let series = |x: f64, patch: f64| {
+            let element = if self.element_flexibility && st.reduced.is_some() {
+                st.element_flexibility(x, patch)
+            } else {
+                0.0
+            };
+            element + st.wheel_residual(x, patch)[0]
+        };
+        let rail = (0..v.n_wheels())
             .map(|wi| {
+                let under = series(v.x0[wi], v.patch[wi]) * held[wi];
                 st.wheel_shape_into(v.x0[wi], v.patch[wi], &mut self.wheel_shape);
-                let under = if series {
-                    st.wheel_flexibility(v.x0[wi], v.patch[wi]) * v.loads[wi]
-                } else {
-                    0.0
-                };
                 dot(&self.wheel_shape.values, &u0[self.wheel_shape.start..]) + under
             })
-            .collect())
+            .collect();
+        if let Some(r) = self.residual.as_mut() {
+            r.hold(j, &held);
+        }
+        Ok(rail)
     }
 }
 

@@ -71,6 +71,33 @@ impl<const W: usize> NewmarkSide<'_, W> {
     }
 }
 
+impl<const W: usize> NewmarkSide<'_, W> {
+    /// Substructured: each wheel's residual filter at its position this step, and the
+    /// filtered residual under no new force added to the rail's free displacement there.
+    fn residual_filters(&mut self, t1: f64, veh: &Vehicles<W>, p: &[f64]) -> Result<()> {
+        let Some(res) = self.residual.as_mut() else {
+            return Ok(());
+        };
+        let (st, cfg) = (&self.model.structure, &self.model.cfg);
+        let (nw, wpc) = (veh.n_wheels(), veh.wpc);
+        for w in 0..nw {
+            let x = veh.x0[w] + cfg.speed * t1;
+            let at = || {
+                format!(
+                    "vehicles[{}] wheel {} at x = {x:.4} m",
+                    w / wpc,
+                    w % wpc + 1
+                )
+            };
+            res.begin(w, st.wheel_residual(x, veh.patch[w]), cfg.solver.dt, p, at)?;
+            for lane in 0..W {
+                self.rail_free[lane * nw + w] += res.free(lane, w);
+            }
+        }
+        Ok(())
+    }
+}
+
 impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
     fn start(&mut self, v: &Vehicles<W>, failed: &mut [Option<VtbError>]) -> Result<Vec<f64>> {
         let f0 = self.initial_load(v);
@@ -98,21 +125,21 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
         _step: usize,
         t1: f64,
         v: &Vehicles<W>,
-        _p: &[f64],
+        p: &[f64],
         _live: &[bool; W],
     ) -> Option<VtbError> {
         self.t1 = t1;
         self.loads(t1);
         self.ports(t1, v);
-        None
+        self.residual_filters(t1, v, p).err()
     }
 
     fn free_rail(&self, lane: usize, wheel: usize) -> f64 {
         self.rail_free[lane * (self.rail_free.len() / W) + wheel]
     }
 
-    /// A = the rail's port compliance plus the cars' own, and each wheel's element
-    /// flexibility.
+    /// A = the rail's port compliance plus the cars' own, each wheel's element flexibility
+    /// and, substructured, its residual filter's step compliance.
     fn compliance(
         &self,
         veh: &Vehicles<W>,
@@ -137,17 +164,22 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
                     }
                 }
             }
-            if self.element_flexibility {
-                // The wheel also deflects the rail within its element (nodes fixed): in
-                // series with the contact, so the static wheel–rail stiffness does not
-                // depend on where in an element the wheel is (no element-passing
-                // excitation from it). Wheels are more than an element apart.
-                for w in 0..wpc {
-                    let wi = ci * wpc + w;
-                    let f = st.wheel_flexibility(veh.x0[wi] + v * t1, veh.patch[wi]);
-                    for lane in 0..W {
-                        amat[lane * nw * nw + wi * nw + wi] += f;
-                    }
+            // The wheel also deflects the rail within its element (nodes fixed): in series
+            // with the contact, so the static wheel–rail stiffness does not depend on where in
+            // an element the wheel is (no element-passing excitation from it). Wheels are
+            // more than an element apart (and, substructured, the residual between two
+            // wheels is left out).
+            for w in 0..wpc {
+                let wi = ci * wpc + w;
+                let mut f = match self.element_flexibility {
+                    true => st.element_flexibility(veh.x0[wi] + v * t1, veh.patch[wi]),
+                    false => 0.0,
+                };
+                if let Some(res) = &self.residual {
+                    f += res.gain(wi);
+                }
+                for lane in 0..W {
+                    amat[lane * nw * nw + wi * nw + wi] += f;
                 }
             }
         }
@@ -162,6 +194,9 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
                 .add_port_forces(&self.track_ports[ci], &v.car_forces(ci, p));
         }
         self.track.end_step();
+        if let Some(res) = self.residual.as_mut() {
+            res.end(p);
+        }
         std::mem::swap(&mut self.f_prev, &mut self.f_next);
         for (ci, ports) in self.track_ports.iter().enumerate() {
             for lane in 0..W {
@@ -228,6 +263,9 @@ impl<const W: usize> StructureSide<W> for NewmarkSide<'_, W> {
         }
         if let Some(rc) = self.correction.as_mut() {
             rc.g_prev[j] = [0.0; 4];
+        }
+        if let Some(res) = self.residual.as_mut() {
+            res.hold(j, &vec![0.0; res.wheels()]);
         }
     }
 

@@ -12,11 +12,10 @@
 //!
 //! each Q_j stepped exactly under a force linear over the step (`step`): no period error at
 //! any Δt; g is each wheel's force through the filter that carries the residual's moments
-//! (`residual`). [`run_lanes`] couples the modes with the wheels (Hertz contact), the dampers
+//! (`engine::coupled::residual`). [`run_lanes`] couples the modes with the wheels (Hertz contact), the dampers
 //! (physical elements on fixed ports) and the moving forces, W jobs in lockstep.
 //!
 //! - `reduction` (this file): the modes, the residual and their checks;
-//! - `residual`: the filter of the residual under a load;
 //! - `step`: complex arithmetic, the exact step's coefficients;
 //! - `kernels`: the two passes over the modes per step (vectorised, lane-generic);
 //! - `run`: the engine's side of the coupled loop, its set-up;
@@ -26,11 +25,9 @@
 mod kernels;
 mod passes;
 mod records;
-mod residual;
 mod run;
 mod step;
 
-pub use residual::{Filter, FilterStep};
 pub use run::{run, run_lanes};
 
 use crate::error::{Result, VtbError};

@@ -4,10 +4,10 @@
 
 use super::kernels::{self, Update, WheelPass};
 use super::records::records;
-use super::residual::{Filter, FilterStep};
 use super::run::{READOUTS, SynthesisSide, dot, near, shape_gain};
 use super::step::C;
 use crate::config::InitialState;
+use crate::engine::coupled::residual::{Filter, FilterStep};
 use crate::engine::coupled::{StructureSide, Vehicles};
 use crate::error::{Result, VtbError};
 use crate::model::basis::Shape;
@@ -184,7 +184,7 @@ impl<const W: usize> SynthesisSide<'_, W> {
             self.diag[w] = modal + moments[0] * self.g_gain[w][0];
             self.rail_free[w] = self.rail_acc[w].sum();
             self.element_flex[w] = if cfg.discretisation.element_flexibility {
-                st.wheel_flexibility(x, veh.patch[w])
+                st.element_flexibility(x, veh.patch[w])
             } else {
                 0.0
             };

@@ -1,4 +1,6 @@
-//! The rail's residual under a load, as a filter (docs/synthesis.md, "The dynamic residual").
+//! The rail's residual under a load, as a filter (docs/synthesis.md, "The dynamic residual"):
+//! the synthesis engine's, of the structure's truncated complex modes, and the substructured
+//! engine's, of the interiors' truncated fixed-interface modes (docs/substructures.md).
 //!
 //! The truncated modes' part of the receptance at a load of shape s, expanded about s = 0, is
 //! r₀ + r₁s + r₂s² (r_k = sᵀR_k s, the reduction's moments). The static residual keeps r₀
@@ -148,6 +150,86 @@ impl FilterStep {
     }
 }
 
+/// The residual filters of a set of wheels in W lanes, for an engine that adds the filtered
+/// residual to a wheel's port (the substructured engine): each step, the wheel's filter from
+/// its moments at its position (`begin`), the residual displacement there under no new force
+/// (`free`) and per unit new force (`gain`), then the states under the solved forces (`end`).
+#[derive(Clone, Debug)]
+pub(crate) struct WheelFilters<const W: usize> {
+    nw: usize,
+    /// (g, ġ) of wheel w in lane c at the step's start, `[c·nw + w]`.
+    state: Vec<[f64; 2]>,
+    /// Their values at the step's end under no new force.
+    free: Vec<[f64; 2]>,
+    /// Per wheel: (g, ġ) at the step's end per unit new force, and r₀.
+    gain: Vec<[f64; 2]>,
+    r0: Vec<f64>,
+}
+
+impl<const W: usize> WheelFilters<W> {
+    pub fn new(nw: usize) -> Self {
+        Self {
+            nw,
+            state: vec![[0.0; 2]; W * nw],
+            free: vec![[0.0; 2]; W * nw],
+            gain: vec![[0.0; 2]; nw],
+            r0: vec![0.0; nw],
+        }
+    }
+
+    /// Wheel w's filter over the step `dt` from its moments r; `p` the forces at the step's
+    /// start, `[c·nw + w]`. An error when the moments are not finite (`at` names the wheel).
+    pub fn begin(
+        &mut self,
+        w: usize,
+        r: [f64; 3],
+        dt: f64,
+        p: &[f64],
+        at: impl FnOnce() -> String,
+    ) -> Result<()> {
+        let step = match Filter::from_moments(r, at)? {
+            Some(f) => f.step(dt),
+            None => FilterStep::pass(dt),
+        };
+        self.r0[w] = r[0];
+        self.gain[w] = step.advance([0.0; 2], 0.0, 1.0);
+        for c in 0..W {
+            let i = c * self.nw + w;
+            self.free[i] = step.advance(self.state[i], p[i], 0.0);
+        }
+        Ok(())
+    }
+
+    /// The residual displacement at wheel w of lane c at the step's end under no new force.
+    pub fn free(&self, c: usize, w: usize) -> f64 {
+        self.r0[w] * self.free[c * self.nw + w][0]
+    }
+
+    /// The residual displacement at wheel w per unit new force on it (its step compliance).
+    pub fn gain(&self, w: usize) -> f64 {
+        self.r0[w] * self.gain[w][0]
+    }
+
+    /// The states at the step's end under the solved forces `p`.
+    pub fn end(&mut self, p: &[f64]) {
+        for (i, (x, f)) in self.state.iter_mut().zip(&self.free).enumerate() {
+            let g = self.gain[i % self.nw];
+            *x = [g[0].mul_add(p[i], f[0]), g[1].mul_add(p[i], f[1])];
+        }
+    }
+
+    pub fn wheels(&self) -> usize {
+        self.nw
+    }
+
+    /// Lane c's filters holding the forces `p` at rest (g = F, ġ = 0).
+    pub fn hold(&mut self, c: usize, p: &[f64]) {
+        for (x, &f) in self.state[c * self.nw..(c + 1) * self.nw].iter_mut().zip(p) {
+            *x = [f, 0.0];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,5 +348,46 @@ mod tests {
         // reduction, `load_moments`).
         let f = Filter::from_moments([-1e-10, 4e-16, 0.0], String::new).unwrap();
         assert_eq!(f, None);
+    }
+
+    #[test]
+    fn wheel_filters_in_lanes_follow_a_fine_integration_of_their_forces() {
+        // Two wheels (one filtered, one without a filter), two lanes with their own forces,
+        // the forces set after each step as the contact would: lane c's wheel 0 displacement
+        // r₀·g against Runge–Kutta on the piecewise-linear force.
+        let (r0, alpha, beta, dt) = (2e-10, 4.2e-6, 5.2e-10, 5e-5);
+        let moments = [r0, -alpha * r0, (alpha * alpha - beta) * r0];
+        let force = |c: usize, n: usize| 1e4 * (1.0 + c as f64) * (1.0 + (n as f64 * 0.7).sin());
+        let mut wf = WheelFilters::<2>::new(2);
+        let mut p = vec![force(0, 0), 5.0, force(1, 0), 6.0];
+        wf.hold(0, &p[..2]);
+        wf.hold(1, &p[2..]);
+        for n in 1..=6 {
+            wf.begin(0, moments, dt, &p, String::new).unwrap();
+            wf.begin(1, [r0, 0.0, 0.0], dt, &p, String::new).unwrap();
+            for c in 0..2 {
+                let f1 = force(c, n);
+                let got = wf.free(c, 0) + wf.gain(0) * f1;
+                let filter = Filter { alpha, beta };
+                let f0 = force(c, n - 1);
+                let mut x = [force(c, 0), 0.0];
+                for k in 1..n {
+                    let (a, b) = (force(c, k - 1), force(c, k));
+                    x = rk4(&filter, x, |t| a + (b - a) * t / dt, dt, 2_000);
+                }
+                let want = r0 * rk4(&filter, x, |t| f0 + (f1 - f0) * t / dt, dt, 2_000)[0];
+                assert!(
+                    (got - want).abs() < 1e-9 * want.abs(),
+                    "lane {c}, step {n}: {got:e} {want:e}"
+                );
+                // No filter: the static residual of the new force.
+                let p1 = 5.0 + c as f64;
+                assert!((wf.free(c, 1) + wf.gain(1) * p1 - r0 * p1).abs() < 1e-24);
+            }
+            for c in 0..2 {
+                p[2 * c] = force(c, n);
+            }
+            wf.end(&p);
+        }
     }
 }
