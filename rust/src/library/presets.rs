@@ -248,8 +248,8 @@ pub fn paper_fast() -> Config {
 
 /// Cut-off (Hz) of the deck grade's substructures: they resolve half of it, the rail on its
 /// pads included, whose resonance the contact force's extremes need. Against the time-converged
-/// finite elements (10 spans, one car and four) the contact minimum is 0.1–0.5 % off at
-/// 1 200 Hz, but 1.7 % at 800 Hz and up to 9.7 % at 600 Hz, where the deck and the ride are
+/// finite elements (5 and 10 spans, one car and four) the contact minima are within 0.9 % at
+/// 1 200 Hz, but up to 6 % off at 800 Hz and 9.7 % at 600 Hz, where the deck and the ride are
 /// already within 0.3 % (docs/substructures.md).
 pub const DECK_CUTOFF: f64 = 1200.0;
 /// Time step (s) of the deck grade: what its kept modes need for the contact force's extremes

@@ -215,6 +215,15 @@ impl<const W: usize> Vehicles<W> {
         self.loads.len()
     }
 
+    /// Wheel w as an error names it, at x (m).
+    pub(crate) fn wheel_name(&self, w: usize, x: f64) -> String {
+        format!(
+            "vehicles[{}] wheel {} at x = {x:.4} m",
+            w / self.wpc,
+            w % self.wpc + 1
+        )
+    }
+
     /// The wheel forces of car `ci` per lane from the contact forces `p` (`[lane·nw + wheel]`),
     /// padded to the port width.
     pub(crate) fn car_forces(&self, ci: usize, p: &[f64]) -> [[f64; GW]; W] {

@@ -79,16 +79,10 @@ impl<const W: usize> NewmarkSide<'_, W> {
             return Ok(());
         };
         let (st, cfg) = (&self.model.structure, &self.model.cfg);
-        let (nw, wpc) = (veh.n_wheels(), veh.wpc);
+        let nw = veh.n_wheels();
         for w in 0..nw {
             let x = veh.x0[w] + cfg.speed * t1;
-            let at = || {
-                format!(
-                    "vehicles[{}] wheel {} at x = {x:.4} m",
-                    w / wpc,
-                    w % wpc + 1
-                )
-            };
+            let at = || veh.wheel_name(w, x);
             res.begin(w, st.wheel_residual(x, veh.patch[w]), cfg.solver.dt, p, at)?;
             for lane in 0..W {
                 self.rail_free[lane * nw + w] += res.free(lane, w);

@@ -143,18 +143,12 @@ impl<const W: usize> SynthesisSide<'_, W> {
                 rail: &mut self.rail_acc,
             },
         );
-        let (dt, wpc) = (cfg.solver.dt, veh.wpc);
+        let dt = cfg.solver.dt;
         let mut failed = None;
         for w in 0..nw {
             let s = &self.wheel_shapes[w];
             let x = veh.x0[w] + cfg.speed * t1;
-            let at = || {
-                format!(
-                    "vehicles[{}] wheel {} at x = {x:.4} m",
-                    w / wpc,
-                    w % wpc + 1
-                )
-            };
+            let at = || veh.wheel_name(w, x);
             let (modal, moments) = if self.active[w] {
                 match red.load_moments(s, at) {
                     Ok(r) => (self.rail_step.quadratic(s), r),
