@@ -342,6 +342,11 @@ class Irregularity(StrictFields):
     parts
         Further irregularities (each an :class:`Irregularity` without parts of its own)
         superposed on this one.
+    beyond_band
+        What a run does with a spectrum or a corrugation that excites the rail beyond the band
+        its model resolves (:func:`vtb.config.resolution.check_excitation`): ``"filter"``
+        (default) leaves its wavelengths below v/f_max out, ``"keep"`` runs it whole (the
+        article's presets: its excitation as published). Both warn.
     """
 
     kind: str = "none"
@@ -369,6 +374,7 @@ class Irregularity(StrictFields):
     wheel: int = 0
     wheel_radius: Optional[float] = None
     parts: list = field(default_factory=list)
+    beyond_band: str = "filter"
 
     def validate(self, speed: Optional[float] = None, dt: Optional[float] = None, wheel_radii: Optional[Sequence[float]] = None, path: str = "irregularity",
                  extent: Optional[tuple] = None) -> None:
@@ -403,6 +409,8 @@ class Irregularity(StrictFields):
             raise config_error(f"{p}.scale", self.scale, "must be >= 0")
         if self.dx is not None:
             finite("dx", self.dx, positive=True)
+        if self.beyond_band not in ("filter", "keep"):
+            raise config_error(f"{p}.beyond_band", self.beyond_band, "must be \"filter\" or \"keep\"")
         if self.kind in SPECTRA:
             finite("wavelength_min", self.wavelength_min, True)
             finite("wavelength_max", self.wavelength_max, True)

@@ -29,8 +29,10 @@ PAPER_CALIBRATED_SCALE = 9.704
 def paper_irregularity(seed: int = PAPER_SEED, scale: float = 1.0) -> Irregularity:
     """The paper preset's irregularity: the TB/T 3352 vertical spectrum extrapolated to the
     0.01–1 m band (the article: "based on the standard Chinese spectrum"), inverse-FFT sample,
-    1 mm sampling."""
-    return Irregularity(kind="tbt3352", wavelength_min=0.01, wavelength_max=1.0, method="ifft", seed=seed, dx=0.001, scale=scale)
+    1 mm sampling, run whole on every model (``beyond_band="keep"``: the article's excitation as
+    published, which reaches beyond the band its own model resolves)."""
+    return Irregularity(kind="tbt3352", wavelength_min=0.01, wavelength_max=1.0, method="ifft", seed=seed, dx=0.001, scale=scale,
+                        beyond_band="keep")
 
 
 #: Discretisations of :func:`paper_config`: the article's own, and the converged one.

@@ -154,6 +154,8 @@ class OutOfBand(NamedTuple):
     excitation: float
     shortest: float
     rms: float
+    #: ``beyond_band = "keep"``: the part is run whole.
+    keep: bool = False
 
 
 def out_of_band(config: Config, band: Optional[ResolvedBand] = None) -> list:
@@ -184,7 +186,7 @@ def out_of_band(config: Config, band: Optional[ResolvedBand] = None) -> list:
         else:
             continue
         if rms > OUT_OF_BAND_RMS:
-            found.append(OutOfBand(path, field, lam_min, v / lam_min, cut, rms))
+            found.append(OutOfBand(path, field, lam_min, v / lam_min, cut, rms, getattr(q, "beyond_band", "filter") == "keep"))
     return found
 
 
@@ -196,13 +198,15 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> dic
     components left out of the same draw, a corrugation left out), so that no contact force or
     loss of contact comes from excitation the model cannot carry. Returns what the run keeps of
     each such part: its path → the shortest wavelength (m), as
-    :meth:`vtb.Irregularity.sample` takes it."""
+    :meth:`vtb.Irregularity.sample` takes it. A part with ``beyond_band = "keep"`` (the
+    article's presets) warns and is run whole."""
     band = band or resolved_band(config)
     rail = band.rail
     f_rail = rail.f_max
     keep = {}
     for part in out_of_band(config, band):
-        keep[part.path] = part.shortest
+        if not part.keep:
+            keep[part.path] = part.shortest
         f_exc = part.excitation
         dt = real_or_none(getattr(config.solver, "dt", None))
         dt_need = dt * rail.time_f_max / f_exc if dt else None
@@ -213,12 +217,15 @@ def check_excitation(config: Config, band: Optional[ResolvedBand] = None) -> dic
         else:
             grade = "a rail basis that resolves it"
         step = f" with solver.dt ≤ {dt_need:.2g} s" if dt_need is not None and f_exc > rail.time_f_max else ""
+        left = (f"the run leaves those wavelengths out of {part.path} (contact forces and losses of contact from them "
+                f"would be artefacts of the model)")
+        kept = (f"the run keeps them ({part.path}.beyond_band = \"keep\"): contact forces and losses of contact from them "
+                f"are artefacts of the model")
         warnings.warn(
             f"{part.field} = {part.wavelength_min:g} m excites the rail up to v/λ = {f_exc:.0f} Hz, beyond the {f_rail:.0f} Hz "
             f"this model resolves for the rail (limited by its {rail.limited_by}; vtb.resolved_band(config)); its roughness "
             f"at wavelengths below v/{f_rail:.0f} Hz = {part.shortest:.3g} m has an r.m.s. of {part.rms * 1e6:.3g} μm (above "
-            f"{OUT_OF_BAND_RMS * 1e6:g} μm): the run leaves those wavelengths out of {part.path} (contact forces and losses "
-            f"of contact from them would be artefacts of the model). Take it on a grade that resolves {f_exc:.0f} Hz "
+            f"{OUT_OF_BAND_RMS * 1e6:g} μm): {kept if part.keep else left}. Take it on a grade that resolves {f_exc:.0f} Hz "
             f"({grade}{step}), or set {part.field} to {part.shortest:.3g} m on this one",
             ResolutionWarning,
             stacklevel=5,
