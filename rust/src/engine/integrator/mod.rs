@@ -45,7 +45,7 @@ use crate::linalg::banded::{BlockLayout, BlockLdlt, BlockPair, BlockTri, PAD};
 use crate::linalg::sparse::{CsrMatrix, Ldlt, SymOperator};
 use crate::model::basis::Shape;
 use crate::model::dampers::Attachment;
-use ports::Column;
+use ports::Columns;
 pub use ports::{PortBlock, SVec};
 use woodbury::Attached;
 
@@ -53,8 +53,6 @@ use woodbury::Attached;
 pub const GW: usize = crate::model::vehicle::MAX_WHEELS;
 /// Port vectors with at most this many entries use cached columns of A⁻¹.
 const COLUMN_PORTS_MAX_LEN: usize = 16;
-/// Cached columns kept before unused ones are dropped.
-const COLUMN_CACHE: usize = 256;
 
 /// The factorised time-stepping matrix A and the products M·v̄, K·v̄ in one pass.
 // One engine per run, never in a collection: the size difference of the variants costs nothing.
@@ -104,9 +102,9 @@ pub enum Numbering<'a> {
     /// The unknowns grouped by node: the block solver if the matrices are block tridiagonal
     /// in that grouping (finite elements on one mesh), else `Search`.
     Blocks(&'a [Vec<usize>]),
-    /// This elimination order or AMD, whichever fills less (finite elements on meshes of their
-    /// own, ordered along the track): both factors cost O(length), so the general search's
-    /// costly trials are skipped.
+    /// This elimination order (finite elements on meshes of their own, ordered along the
+    /// track), or AMD where it fills less and no contact asks for columns of A⁻¹: both
+    /// factors cost O(length), so the general search's costly trials are skipped.
     Order(&'a [usize]),
     /// This elimination order, along the track (substructured coordinates): a port vector's
     /// forward substitution then decays along it, which `Newmark::set_port_reach` uses.
@@ -141,7 +139,7 @@ pub struct Newmark<const W: usize = 1> {
     z: Vec<f64>,
     /// Column ports: columns of A⁻¹ at the unknowns port vectors touch (stepper numbering),
     /// computed on first use.
-    columns: Option<std::collections::HashMap<usize, Column>>,
+    columns: Option<Columns>,
     /// Forward ports with force vectors: (k, L⁻¹·P·e_k from row k on) for the few unknowns k
     /// where force and displacement vectors differ.
     units: Vec<(usize, Vec<f64>)>,
@@ -191,10 +189,16 @@ impl<const W: usize> Newmark<W> {
             }
             None => {
                 let factor = match numbering {
+                    // Wheels crossing a short-port structure keep asking for new columns of
+                    // A⁻¹: along the track each is a window (`Ldlt::column_window`), with AMD
+                    // the whole structure. Without them AMD, linear too on a track, wins
+                    // where it fills less (a solve's work is L's entries).
+                    Numbering::Order(order)
+                        if !ports.is_empty() && port_len <= COLUMN_PORTS_MAX_LEN =>
+                    {
+                        Ldlt::with_ordering(&a, Some(order))?
+                    }
                     Numbering::Order(order) => {
-                        // The given order bounds the fill by its bandwidth (linear in length);
-                        // AMD, linear too on a track, fills less where it finds the short
-                        // chains between couplings. A solve's work is L's entries: fewer wins.
                         let (along, amd) = (Ldlt::with_ordering(&a, Some(order))?, Ldlt::new(&a)?);
                         if amd.nnz_l() < along.nnz_l() {
                             amd
@@ -236,7 +240,7 @@ impl<const W: usize> Newmark<W> {
             q: vec![0.0; n * W],
             s: vec![0.0; n * W],
             z: vec![0.0; n * W],
-            columns: column_ports.then(std::collections::HashMap::new),
+            columns: column_ports.then(Columns::default),
             units: Vec::new(),
             port_reach: usize::MAX,
             y1: vec![0.0; n * W],
@@ -370,12 +374,8 @@ impl<const W: usize> Newmark<W> {
 
     /// Starts a step with the known forces F_n and F_{n+1} (stepper numbering, all lanes).
     pub fn begin_step(&mut self, f_prev: &[f64], f_next: &[f64]) {
-        // Columns are dropped between steps only: every port block of a step (one per car)
-        // must find its columns until the step ends.
-        if let Some(cache) = &mut self.columns
-            && cache.len() > COLUMN_CACHE
-        {
-            cache.clear();
+        if let Some(cache) = &mut self.columns {
+            cache.begin_step();
         }
         let h = 0.5 * self.dt;
         for (((z, q), fp), fnx) in self.z.iter_mut().zip(&self.q).zip(f_prev).zip(f_next) {

@@ -3,7 +3,7 @@
 //! them) and the stepper's port operations of a step — preparation (forward substitution or
 //! cached columns of A⁻¹), free displacements, compliance and forces.
 
-use super::{GW, Newmark};
+use super::{Engine, GW, Newmark};
 
 /// Entries of a cached column of A⁻¹ below this fraction of its largest are dropped: they lie
 /// below the rounding of every sum they enter. A = 2M + Δt·C + (Δt²/2)·K is dominated by its
@@ -11,24 +11,52 @@ use super::{GW, Newmark};
 /// about tenfold per node at Δt = 5e-5 s) and a column shrinks to a window of a few dozen nodes.
 const COLUMN_DROP: f64 = 1.0 / (1u64 << 60) as f64;
 
+/// Entries the cached columns hold before the longest unused are dropped (32 MB). A train's
+/// wheels follow each other over the same nodes, so a column computed for the first wheel
+/// serves every wheel behind it while it stays: the budget holds a few thousand columns, a
+/// train's length of rail.
+const COLUMN_CACHE_VALUES: usize = 1 << 22;
+
 /// A column of A⁻¹ restricted to the window `start..start + values.len()` outside which its
 /// entries are negligible (`COLUMN_DROP`).
 #[derive(Clone, Debug)]
 pub(super) struct Column {
     start: usize,
     values: Vec<f64>,
+    /// The last step that used it.
+    used: u64,
 }
 
 impl Column {
-    fn new(full: &[f64]) -> Self {
-        let big = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    /// The column from its entries `window` at rows `offset..`, trimmed to `COLUMN_DROP`.
+    fn new(window: &[f64], offset: usize, used: u64) -> Self {
+        let big = window.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let keep = |v: &f64| v.abs() > COLUMN_DROP * big;
-        let start = full.iter().position(keep).unwrap_or(0);
-        let end = full.iter().rposition(keep).map_or(start, |e| e + 1);
+        let start = window.iter().position(keep).unwrap_or(0);
+        let end = window.iter().rposition(keep).map_or(start, |e| e + 1);
         Self {
-            start,
-            values: full[start..end].to_vec(),
+            start: offset + start,
+            values: window[start..end].to_vec(),
+            used,
         }
+    }
+
+    /// Column k of A⁻¹ (stepper numbering): windowed where the factor runs along the track
+    /// (`Ldlt::column_window`: the work of the window, not of the structure), else a full
+    /// solve. `scratch` is zero, and left so.
+    fn solve(engine: &Engine, ns: usize, k: usize, scratch: &mut Vec<f64>, used: u64) -> Self {
+        if let Engine::Sparse { factor, .. } = engine {
+            scratch.resize(ns, 0.0);
+            if let Some((lo, hi)) = factor.column_window(k, COLUMN_DROP, scratch) {
+                let column = Self::new(&scratch[lo..hi], lo, used);
+                scratch[lo..hi].fill(0.0);
+                return column;
+            }
+        }
+        let mut e = vec![0.0; ns];
+        e[k] = 1.0;
+        engine.solve_from::<1>(&mut e, k);
+        Self::new(&e, 0, used)
     }
 
     /// vᵀ·column.
@@ -38,6 +66,65 @@ impl Column {
             .zip(&v.val)
             .filter_map(|(&i, &x)| self.values.get(i.wrapping_sub(self.start)).map(|c| c * x))
             .sum()
+    }
+}
+
+/// The cached columns of A⁻¹ (column ports), by unknown (stepper numbering).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Columns {
+    map: std::collections::HashMap<usize, Column>,
+    /// Entries held by all columns.
+    values: usize,
+    /// Steps begun.
+    step: u64,
+    /// Zeros, the length of the factorised unknowns (a windowed column's work space).
+    scratch: Vec<f64>,
+}
+
+impl Columns {
+    /// Starts a step. Beyond `COLUMN_CACHE_VALUES` the columns unused longest are dropped
+    /// down to half of it, never one the last step used (its ports' unknowns, which the
+    /// wheels have not left yet). Dropping only between steps: every port block of a step (one
+    /// per car) finds its columns until the step ends.
+    pub(super) fn begin_step(&mut self) {
+        self.step += 1;
+        if self.values <= COLUMN_CACHE_VALUES {
+            return;
+        }
+        let mut stale: Vec<(u64, usize)> = self
+            .map
+            .iter()
+            .filter(|(_, c)| c.used + 1 < self.step)
+            .map(|(&k, c)| (c.used, k))
+            .collect();
+        stale.sort_unstable();
+        for (_, k) in stale {
+            if self.values <= COLUMN_CACHE_VALUES / 2 {
+                break;
+            }
+            if let Some(c) = self.map.remove(&k) {
+                self.values -= c.values.len();
+            }
+        }
+    }
+
+    /// Column k, solved on first use; marks it used.
+    fn touch(&mut self, k: usize, engine: &Engine, ns: usize) {
+        let step = self.step;
+        if let Some(c) = self.map.get_mut(&k) {
+            c.used = step;
+            return;
+        }
+        let c = Column::solve(engine, ns, k, &mut self.scratch, step);
+        self.values += c.values.len();
+        self.map.insert(k, c);
+    }
+}
+
+impl std::ops::Index<&usize> for Columns {
+    type Output = Column;
+    fn index(&self, k: &usize) -> &Column {
+        &self.map[k]
     }
 }
 
@@ -216,12 +303,7 @@ impl<const W: usize> Newmark<W> {
         if let Some(cache) = &mut self.columns {
             for v in ports.vecs.iter().chain(ports.force.iter().flatten()) {
                 for &k in &v.idx {
-                    cache.entry(k).or_insert_with(|| {
-                        let mut e = vec![0.0; self.ns];
-                        e[k] = 1.0;
-                        self.engine.solve_from::<1>(&mut e, k);
-                        Column::new(&e)
-                    });
+                    cache.touch(k, &self.engine, self.ns);
                 }
             }
             return;

@@ -98,7 +98,13 @@ impl Ldlt {
         if end > self.p {
             return self.n; // the border rows too
         }
-        let touch = self.touch.get_or_init(|| {
+        self.touch()[end.min(self.n) - 1]
+    }
+
+    /// `touch[k]`: one past the last row any interior column ≤ k writes in the forward
+    /// substitution (reads in the backward one).
+    fn touch(&self) -> &[usize] {
+        self.touch.get_or_init(|| {
             let mut last = vec![0usize; self.n];
             for unit in &self.units {
                 match *unit {
@@ -136,8 +142,7 @@ impl Ldlt {
                 *v = run;
             }
             last
-        });
-        touch[end.min(self.n) - 1]
+        })
     }
 
     /// Number of off-diagonal entries of L.

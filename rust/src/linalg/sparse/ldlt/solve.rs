@@ -185,6 +185,132 @@ impl Ldlt {
         }
     }
 
+    /// Column k of A⁻¹ (this factor's numbering) over the rows where it matters, for a factor
+    /// whose L is banded along its order (finite elements numbered along the track): its
+    /// entries decay away from row k, so the substitutions stop where they have. The forward
+    /// one runs from row k until what it would carry past its end is below `drop` times the
+    /// largest of L⁻¹e_k; the backward one from there down until every row the columns below
+    /// still read is below `drop` times the largest entry found. The work is the window's,
+    /// not the structure's. `z` must be zero (length n); the column is left in
+    /// `z[lo..hi]` for the returned `(lo, hi)` and the rest of `z` zero. `None` (z zero again)
+    /// when the window reaches the border rows (they may hold every column): solve in full.
+    pub fn column_window(&self, k: usize, drop: f64, z: &mut [f64]) -> Option<(usize, usize)> {
+        /// Rows added to the forward window at a time (before rounding up to a unit's end).
+        const CHUNK: usize = 64;
+        assert_eq!(z.len(), self.n);
+        assert!(k < self.n, "column {k} of {}", self.n);
+        if k >= self.p {
+            return None;
+        }
+        // Row r, or the end of the segment holding row r − 1: no segment (applied whole) is
+        // split between two calls.
+        let unit_end = |r: usize| match self.units[self.units.partition_point(|u| u.end() < r)] {
+            seg @ Unit::Segment { .. } => seg.end(),
+            Unit::Columns { .. } => r,
+        };
+        z[k] = 1.0;
+        let (mut start, mut end, mut ymax) = (k, k, 1.0f64);
+        loop {
+            if end == self.p {
+                if self.p < self.n {
+                    z[k..].fill(0.0);
+                    return None;
+                }
+                break;
+            }
+            let next = unit_end((end + CHUNK).min(self.p));
+            self.forward_until::<1>(z, start, next);
+            ymax = z[end..next].iter().fold(ymax, |m, v| m.max(v.abs()));
+            (start, end) = (next, next);
+            let spill = self.spill(end);
+            if self.border_reads(k, end) {
+                z[k..spill].fill(0.0);
+                return None;
+            }
+            if z[end..spill].iter().all(|v| v.abs() <= drop * ymax) {
+                z[end..spill].fill(0.0);
+                break;
+            }
+        }
+        for (x, d) in z[k..end].iter_mut().zip(&self.d_inv[k..end]) {
+            *x *= d;
+        }
+        const W: usize = 1; // one right-hand side, with the lanes' fused kernels
+        let lo = crate::wide!(<W> (this: &Ldlt = self, z: &mut [f64] = z, k: usize = k, end: usize = end, drop: f64 = drop) -> usize {
+            this.column_backward(z, k, end, drop)
+        });
+        Some((lo, end))
+    }
+
+    /// Whether a border row has entries in the columns `from..to`: a column of A⁻¹ whose
+    /// window holds them reaches the border rows, and through them every column they hold.
+    fn border_reads(&self, from: usize, to: usize) -> bool {
+        self.brun.iter().any(|&(s, l, _)| s < to && s + l > from)
+    }
+
+    /// The backward half of `column_window` (z holds D⁻¹L⁻¹e_k on rows k..end, zero
+    /// elsewhere): returns the first row computed.
+    #[inline(always)]
+    fn column_backward(&self, z: &mut [f64], k: usize, end: usize, drop: f64) -> usize {
+        // Backward: stop below row k once the lowest row above the threshold lies past
+        // every row the columns still to come read (`touch`).
+        let touch = self.touch();
+        let (mut xmax, mut lowest_big) = (0.0f64, end);
+        let note = |x: f64, row: usize, xmax: &mut f64, lowest: &mut usize| {
+            *xmax = xmax.max(x.abs());
+            if x.abs() > drop * *xmax {
+                *lowest = row;
+            }
+        };
+        let last = self.units.partition_point(|u| u.end() < end);
+        let mut lo = 0;
+        'units: for unit in self.units[..=last].iter().rev() {
+            match *unit {
+                Unit::Segment {
+                    k0,
+                    len,
+                    off,
+                    n_off,
+                    val,
+                } => {
+                    if k0 + len <= k && lowest_big >= touch[k0 + len - 1] {
+                        lo = k0 + len;
+                        break 'units;
+                    }
+                    for q in 0..n_off {
+                        let o = self.seg_off[off + q];
+                        let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
+                        let (dst, src) = z.split_at_mut(k0 + o);
+                        for j in 0..len {
+                            dst[k0 + j] = (-vals[j]).mul_add(src[j], dst[k0 + j]);
+                        }
+                    }
+                    for r in (k0..k0 + len).rev() {
+                        note(z[r], r, &mut xmax, &mut lowest_big);
+                    }
+                }
+                Unit::Columns { from, to } => {
+                    for c in (from..to.min(end)).rev() {
+                        if c < k && lowest_big >= touch[c] {
+                            lo = c + 1;
+                            break 'units;
+                        }
+                        // Two partial sums, as `diag_backward` adds them.
+                        let (a, b) = (self.col_ptr[c] as usize, self.col_ptr[c + 1] as usize);
+                        let mut s = [0.0; 2];
+                        for p in a..b {
+                            let q = &mut s[(p - a) & 1];
+                            *q = self.l[p].mul_add(z[self.row_idx[p] as usize], *q);
+                        }
+                        z[c] -= s[0] + s[1];
+                        note(z[c], c, &mut xmax, &mut lowest_big);
+                    }
+                }
+            }
+        }
+        lo
+    }
+
     /// D⁻¹ weights (for products of forward-solved vectors).
     pub fn d_inv(&self) -> &[f64] {
         &self.d_inv
