@@ -2,10 +2,12 @@
 ordering"): the converged preset (`vtb.paper_config(model="converged")`, rail in 0.032 m
 elements, lower layers in 0.32 m ones, each layer its own mesh) re-spanned over N simply
 supported 32 m spans, one CRH3 car, for N = 5, 10, 20, 40; set-up (the core's assembly and
-factorisation, before the first step) and the cost of one step, with their exponents in N
-fitted by least squares in log–log.
+factorisation, before the first step) and the cost of one step, with their exponents in the
+structure's length fitted by least squares in log–log. With ``--cars K`` (K > 1) a K-car CRH3
+on the spans between 100 m embankments, its front 5 m past its length at the start: a train's
+wheels keep asking for new columns of A⁻¹ as they cross the elements.
 
-    python benches/fem_length.py [--spans 5 10 20 40] [--steps 2000]
+    python benches/fem_length.py [--spans 5 10 20 40] [--steps 2000] [--cars 8]
                                  [--baseline /path/to/old/python] [--old-max-spans 20]
 
 Each measurement runs in a process of its own. With ``--baseline`` (a ``python/`` folder whose
@@ -33,16 +35,19 @@ HERE = Path(__file__).resolve().parent
 NEW_PYTHON = HERE.parent / "python"
 
 
-def config(n_spans: int, steps: int):
+def config(n_spans: int, steps: int, cars: int = 1):
     import vtb
 
     c = vtb.paper_config(model="converged")
     c = vtb.spans(c, [32.0] * n_spans, simply_supported=True)
+    if cars > 1:
+        c = vtb.track_zones(c, approach=100.0, exit=100.0)
+        c.vehicles = vtb.train("crh3", cars=cars, x_front=26.0 * cars + 5.0, contact_patch=True)
     c.solver.t_end = steps * c.solver.dt
     return c
 
 
-def measure(n_spans: int, steps: int) -> dict:
+def measure(n_spans: int, steps: int, cars: int = 1) -> dict:
     """One run in this process: set-up and per-step CPU time, and the results' histories."""
     import time
     import warnings
@@ -52,7 +57,8 @@ def measure(n_spans: int, steps: int) -> dict:
     from vtb.run.simulate import prepare
 
     warnings.simplefilter("ignore")
-    text, profile = prepare(config(n_spans, steps))
+    cfg = config(n_spans, steps, cars)
+    text, profile = prepare(cfg)
     marks = []
     c0, w0 = time.process_time(), time.perf_counter()
 
@@ -71,6 +77,7 @@ def measure(n_spans: int, steps: int) -> dict:
         fit[name] = (float(icpt), float(slope))
     return {
         "spans": n_spans,
+        "length": cfg.structure.length,
         "setup": fit["cpu"][0],
         "step": fit["cpu"][1],
         "setup_wall": fit["wall"][0],
@@ -81,16 +88,16 @@ def measure(n_spans: int, steps: int) -> dict:
     }
 
 
-def run_in(python_dir: Path, n_spans: int, steps: int) -> dict:
+def run_in(python_dir: Path, n_spans: int, steps: int, cars: int) -> dict:
     env = {**os.environ, "PYTHONPATH": str(python_dir)}
-    res = subprocess.run([sys.executable, __file__, "--one", str(n_spans), "--steps", str(steps)],
+    res = subprocess.run([sys.executable, __file__, "--one", str(n_spans), "--steps", str(steps), "--cars", str(cars)],
                          env=env, capture_output=True, text=True, check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
 def exponent(rows, key):
-    """Least-squares slope of log(value) against log(spans)."""
-    pts = [(math.log(r["spans"]), math.log(r[key])) for r in rows if r and r[key] > 0]
+    """Least-squares slope of log(value) against log(length)."""
+    pts = [(math.log(r["length"]), math.log(r[key])) for r in rows if r and r[key] > 0]
     if len(pts) < 2:
         return float("nan")
     mx = sum(p[0] for p in pts) / len(pts)
@@ -118,18 +125,19 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--spans", type=int, nargs="+", default=[5, 10, 20, 40])
     ap.add_argument("--steps", type=int, default=2000)
+    ap.add_argument("--cars", type=int, default=1, help="a CRH3 train of this many cars (1: the preset's car)")
     ap.add_argument("--baseline", type=Path, help="python/ folder of an older build to compare with")
     ap.add_argument("--old-max-spans", type=int, default=40, help="measure the old build up to this many spans")
     ap.add_argument("--json", type=Path, help="write the rows here")
     ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.one is not None:
-        print(json.dumps(measure(a.one, a.steps)))
+        print(json.dumps(measure(a.one, a.steps, a.cars)))
         return
     new_rows, old_rows = [], []
     for n in a.spans:
-        new = run_in(NEW_PYTHON, n, a.steps)
-        old = run_in(a.baseline, n, a.steps) if a.baseline and n <= a.old_max_spans else None
+        new = run_in(NEW_PYTHON, n, a.steps, a.cars)
+        old = run_in(a.baseline, n, a.steps, a.cars) if a.baseline and n <= a.old_max_spans else None
         new_rows.append(new)
         old_rows.append(old)
         line = f"{n:3d} spans  set-up {new['setup']:7.2f} s  step {1e3 * new['step']:7.3f} ms"
