@@ -135,7 +135,11 @@ fn a_windowed_column_of_the_inverse_is_the_full_solves_where_it_matters() {
             let big = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let (lo, hi) = f.column_window(k, drop, &mut z).unwrap();
             assert!(lo <= k && k < hi);
-            assert!(hi - lo < a.n / 8, "column {k}: window {lo}..{hi} of {}", a.n);
+            assert!(
+                hi - lo < a.n / 8,
+                "column {k}: window {lo}..{hi} of {}",
+                a.n
+            );
             for (i, want) in full.iter().enumerate() {
                 let got = if (lo..hi).contains(&i) { z[i] } else { 0.0 };
                 assert!(

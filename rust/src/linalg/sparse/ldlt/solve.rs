@@ -141,47 +141,62 @@ impl Ldlt {
         }
         for unit in self.units.iter().rev() {
             match *unit {
-                Unit::Segment {
-                    k0,
-                    len,
-                    off,
-                    n_off,
-                    val,
-                } => {
-                    for q in 0..n_off {
-                        let o = self.seg_off[off + q];
-                        let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
-                        let (dst, src) = zi.split_at_mut((k0 + o) * W);
-                        let (dst, src) = (&mut dst[k0 * W..(k0 + len) * W], &src[..len * W]);
-                        for j in 0..len {
-                            for c in 0..W {
-                                dst[j * W + c] = (-vals[j]).mul_add(src[j * W + c], dst[j * W + c]);
-                            }
-                        }
-                    }
-                }
+                Unit::Segment { .. } => self.backward_segment::<W>(zi, unit),
                 Unit::Columns { from, to } => {
                     for k in (from..to).rev() {
-                        let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
-                        // Two partial sums (even and odd entries) halve the latency chain.
-                        let mut s = [[0.0; W]; 2];
-                        for p in a..b {
-                            // SAFETY: as in `forward`; interior row indices are < zi.len()/W.
-                            unsafe {
-                                let i = *self.row_idx.get_unchecked(p) as usize;
-                                let l = *self.l.get_unchecked(p);
-                                for c in 0..W {
-                                    let q = &mut s[(p - a) & 1][c];
-                                    *q = l.mul_add(*zi.get_unchecked(i * W + c), *q);
-                                }
-                            }
-                        }
-                        for c in 0..W {
-                            zi[k * W + c] -= s[0][c] + s[1][c];
-                        }
+                        self.backward_column::<W>(zi, k);
                     }
                 }
             }
+        }
+    }
+
+    /// The backward substitution's step over a segment: its columns' rows from the rows
+    /// their entries reach (interior rows of `zi`, W lanes).
+    #[inline(always)]
+    fn backward_segment<const W: usize>(&self, zi: &mut [f64], unit: &Unit) {
+        let Unit::Segment {
+            k0,
+            len,
+            off,
+            n_off,
+            val,
+        } = *unit
+        else {
+            return;
+        };
+        for q in 0..n_off {
+            let o = self.seg_off[off + q];
+            let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
+            let (dst, src) = zi.split_at_mut((k0 + o) * W);
+            let (dst, src) = (&mut dst[k0 * W..(k0 + len) * W], &src[..len * W]);
+            for j in 0..len {
+                for c in 0..W {
+                    dst[j * W + c] = (-vals[j]).mul_add(src[j * W + c], dst[j * W + c]);
+                }
+            }
+        }
+    }
+
+    /// The backward substitution's step at interior column k: z_k −= Σ L_ik·z_i.
+    #[inline(always)]
+    fn backward_column<const W: usize>(&self, zi: &mut [f64], k: usize) {
+        let (a, b) = (self.col_ptr[k] as usize, self.col_ptr[k + 1] as usize);
+        // Two partial sums (even and odd entries) halve the latency chain.
+        let mut s = [[0.0; W]; 2];
+        for p in a..b {
+            // SAFETY: as in `forward`; interior row indices are < zi.len()/W.
+            unsafe {
+                let i = *self.row_idx.get_unchecked(p) as usize;
+                let l = *self.l.get_unchecked(p);
+                for c in 0..W {
+                    let q = &mut s[(p - a) & 1][c];
+                    *q = l.mul_add(*zi.get_unchecked(i * W + c), *q);
+                }
+            }
+        }
+        for c in 0..W {
+            zi[k * W + c] -= s[0][c] + s[1][c];
         }
     }
 
@@ -266,25 +281,12 @@ impl Ldlt {
         let mut lo = 0;
         'units: for unit in self.units[..=last].iter().rev() {
             match *unit {
-                Unit::Segment {
-                    k0,
-                    len,
-                    off,
-                    n_off,
-                    val,
-                } => {
+                Unit::Segment { k0, len, .. } => {
                     if k0 + len <= k && lowest_big >= touch[k0 + len - 1] {
                         lo = k0 + len;
                         break 'units;
                     }
-                    for q in 0..n_off {
-                        let o = self.seg_off[off + q];
-                        let vals = &self.seg_val[val + q * len..val + (q + 1) * len];
-                        let (dst, src) = z.split_at_mut(k0 + o);
-                        for j in 0..len {
-                            dst[k0 + j] = (-vals[j]).mul_add(src[j], dst[k0 + j]);
-                        }
-                    }
+                    self.backward_segment::<1>(z, unit);
                     for r in (k0..k0 + len).rev() {
                         note(z[r], r, &mut xmax, &mut lowest_big);
                     }
@@ -295,14 +297,7 @@ impl Ldlt {
                             lo = c + 1;
                             break 'units;
                         }
-                        // Two partial sums, as `diag_backward` adds them.
-                        let (a, b) = (self.col_ptr[c] as usize, self.col_ptr[c + 1] as usize);
-                        let mut s = [0.0; 2];
-                        for p in a..b {
-                            let q = &mut s[(p - a) & 1];
-                            *q = self.l[p].mul_add(z[self.row_idx[p] as usize], *q);
-                        }
-                        z[c] -= s[0] + s[1];
+                        self.backward_column::<1>(z, c);
                         note(z[c], c, &mut xmax, &mut lowest_big);
                     }
                 }
