@@ -163,9 +163,10 @@ fn dampers_by_woodbury_match_assembled_matrices() {
 
 /// A wheel-like port (a load and a contact spring on the rail's shape vector at a moving x)
 /// on two 32 m spans of the converged preset's finite elements (rail ten times finer than the
-/// lower layers): with the length order (the stepper keeps the factor that fills less, the
-/// order's or AMD's) it gives the general search's results to round-off, in the rail's and
-/// the girder's displacements and the contact force.
+/// lower layers): with the length order (with contact ports the stepper keeps it, and its
+/// columns of A⁻¹ are windows of about ±20 m around the wheel, which starts mid-structure) it
+/// gives the general search's results (full solves) to round-off, in the rail's and the
+/// girder's displacements and the contact force.
 #[test]
 fn length_order_matches_the_general_search_on_two_spans() {
     let mut cfg = crate::library::presets::paper_converged();
